@@ -1,0 +1,23 @@
+"""The one error type for bad user input: file, field path and what is wrong, on one line."""
+
+from __future__ import annotations
+
+
+class InputError(Exception):
+    """Bad input from the user (spec, scenario, option). The CLI prints it as one line, exit 2."""
+
+    exit_status = 2
+
+    def __init__(self, source: str, field: str, message: str):
+        self.source = str(source)
+        self.field = field
+        self.message = message
+        super().__init__(self.line())
+
+    def line(self) -> str:
+        where = f"{self.source}: {self.field}" if self.field else self.source
+        return f"{where}: {self.message}"
+
+
+class ResourceError(InputError):
+    """A design needs more of the machine than the profile has."""

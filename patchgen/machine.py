@@ -1,0 +1,96 @@
+"""Machine profiles: the analog computer's amplifiers, pots, weights and imperfections, as data."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from .errors import InputError
+from .validation import read_toml, validate
+
+PROFILE_DIR = Path(__file__).parent / "machines"
+
+Role = Literal["integrator", "summer", "inverter", "differentiator"]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class AmplifierSlot(_Strict):
+    """One physical amplifier on the panel and what it can be patched as."""
+
+    id: str
+    roles: list[Role]
+    inputs: dict[str, int] = Field(description="count of inputs per weight, keys 'x1', 'x10'")
+
+    def input_count(self, weight: int) -> int:
+        return self.inputs.get(f"x{weight}", 0)
+
+
+class Components(_Strict):
+    """Passive parts behind the panel (for the SPICE export)."""
+
+    input_resistor_x1_ohm: float = Field(gt=0)
+    input_resistor_x10_ohm: float = Field(gt=0)
+    feedback_resistor_ohm: float = Field(gt=0)
+    integrator_capacitor_F: float = Field(gt=0)
+    pot_resistance_ohm: float = Field(gt=0)
+    differentiator_capacitor_F: float = Field(gt=0)
+    opamp_open_loop_gain: float = Field(gt=1)
+    opamp_output_resistance_ohm: float = Field(ge=0)
+
+
+class Imperfections(_Strict):
+    """What makes the real machine differ from ideal elements (for the simulators)."""
+
+    integrator_offset_V: float = Field(ge=0)
+    integrator_bias_A: float = Field(ge=0)
+    saturation_V: float = Field(gt=0)
+    amplifier_noise_V_rms: float = Field(ge=0)
+    noise_bandwidth_Hz: float = Field(gt=0)
+    differentiator_rolloff_s: float = Field(gt=0)
+
+
+class MachineProfile(_Strict):
+    """A whole machine: read from patchgen/machines/<id>.toml or a user path."""
+
+    id: str
+    name: str
+    reference_V: float = Field(gt=0)
+    time_scale_s: float = Field(gt=0)
+    pot_count: int = Field(ge=0)
+    pot_resolution: float = Field(gt=0, lt=1)
+    pot_max: float = Field(gt=0)
+    input_weights: list[int]
+    ic_mode: str
+    pot_set_mode: str
+    overload_indicator: bool
+    max_units: int = Field(ge=1)
+    amplifiers: list[AmplifierSlot]
+    components: Components
+    imperfections: Imperfections
+
+    def integrator_drift_V_per_s(self) -> float:
+        """Drift rate of an integrator with no input: e_os/(R C) + i_b/C (gp6.md)."""
+        c = self.components
+        return (self.imperfections.integrator_offset_V / (c.input_resistor_x1_ohm * c.integrator_capacitor_F)
+                + self.imperfections.integrator_bias_A / c.integrator_capacitor_F)
+
+
+def available_machines() -> list[str]:
+    return sorted(p.stem for p in PROFILE_DIR.glob("*.toml"))
+
+
+def load_machine(name_or_path: str, source: str = "", field: str = "machine") -> MachineProfile:
+    """Load a shipped profile by id (e.g. 'gp6') or a profile file by path."""
+    path = Path(name_or_path)
+    if not path.suffix:
+        path = PROFILE_DIR / f"{name_or_path}.toml"
+        if not path.exists():
+            raise InputError(source or name_or_path, field,
+                             f"unknown machine {name_or_path!r} (known: {', '.join(available_machines())})")
+    data = read_toml(path)
+    return validate(MachineProfile, data, str(path))

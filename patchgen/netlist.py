@@ -1,0 +1,161 @@
+"""The netlist: what is patched on the machine, as a versioned JSON document.
+
+Schema id ``patchgen.netlist/1``. Ideal meaning of each amplifier role (all amplifiers invert;
+``k_j`` is the pot setting feeding input j, or 1 with no pot; ``w_j`` the input weight 1 or 10;
+``T`` the machine time scale):
+
+- summer, inverter: ``out = -sum_j w_j k_j v_j``
+- integrator:       ``d(out)/dt = -(1/T) sum_j w_j k_j v_j``, ``out(0) = ic_V``
+- differentiator:   ``rolloff_s * d(out)/dt + out = -T_d_s * d/dt(sum_j w_j k_j v_j)``
+- lag:              ``tau_s * d(out)/dt + out = -sum_j w_j k_j v_j`` (an integrator with
+                    resistive feedback)
+
+Sources are sensor ids (``s``, ``theta``, ``s_dot``) or amplifier ids. Sensor voltages are
+``volts_per_unit`` times the physical quantity, with its sign. The control output is the
+voltage of ``output.source``; the actuator turns it into force (K_U newtons per volt).
+``carries`` states what an amplifier output is meant to be: ``polarity * volts_per_unit *
+quantity``, so a reader can check every sign.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+SCHEMA_ID = "patchgen.netlist/1"
+
+AmpRole = Literal["integrator", "summer", "inverter", "differentiator", "lag"]
+
+
+class _Doc(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class Signal(_Doc):
+    """What a voltage represents: polarity * volts_per_unit * quantity."""
+
+    quantity: str = Field(description="e.g. theta_dot, int_theta, u_c, xhat_theta_dot")
+    polarity: Literal[1, -1]
+    volts_per_unit: float = Field(description="volts per SI unit of the quantity (1 for volts)")
+    unit: str = ""
+
+
+class SensorInput(_Doc):
+    id: str = Field(description="signal id used as a source: s, theta or s_dot")
+    label: str
+    quantity: str
+    unit: str
+    volts_per_unit: float
+
+
+class AmpInput(_Doc):
+    source: str = Field(description="sensor id or amplifier id whose output feeds this input")
+    pot: str | None = Field(default=None, description="pot id between source and input, or none")
+    weight: Literal[1, 10]
+    jack: str = Field(description="which input jack of the amplifier, e.g. x1a, x10b")
+
+
+class Amplifier(_Doc):
+    id: str = Field(description="the machine's amplifier id (profile)")
+    role: AmpRole
+    inputs: list[AmpInput]
+    carries: Signal
+    ic_V: float | None = Field(default=None, description="initial condition (integrators, lags)")
+    T_d_s: float | None = Field(default=None, description="differentiator gain time constant")
+    rolloff_s: float | None = Field(default=None, description="differentiator roll-off time constant")
+    tau_s: float | None = Field(default=None, description="lag time constant")
+    purpose: str = ""
+
+
+class Pot(_Doc):
+    id: str
+    setting: float = Field(ge=0, description="dial setting, quantised to the dial resolution")
+    source: str
+    amplifier: str
+    jack: str
+    weight: Literal[1, 10]
+    signal: str = Field(description="human name of the signal through the pot")
+    coefficient: float = Field(description="the design coefficient this pot realises (V/V, signed)")
+    realized: float = Field(description="signed coefficient realised: sign * setting * weight")
+    note: str = ""
+
+    @property
+    def error(self) -> float:
+        """Relative error of the realised coefficient against the design (0 when both 0)."""
+        if self.coefficient == 0.0:
+            return 0.0 if self.realized == 0.0 else float("inf")
+        return self.realized / self.coefficient - 1.0
+
+
+class ControlOutput(_Doc):
+    source: str
+    quantity: str = "u_c"
+    K_U_N_per_V: float
+
+
+class Netlist(_Doc):
+    schema_id: str = Field(default=SCHEMA_ID, alias="schema")
+    design: str
+    description: str = ""
+    machine: str
+    machine_name: str
+    units: int = 1
+    reference_V: float
+    time_scale_s: float
+    pot_resolution: float
+    sensors: list[SensorInput]
+    amplifiers: list[Amplifier]
+    pots: list[Pot]
+    output: ControlOutput
+    operation: list[str] = Field(default_factory=list, description="mode and IC steps, in order")
+    notes: list[str] = Field(default_factory=list)
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+    def amp(self, amp_id: str) -> Amplifier:
+        for a in self.amplifiers:
+            if a.id == amp_id:
+                return a
+        raise KeyError(amp_id)
+
+    def pot(self, pot_id: str) -> Pot:
+        for p in self.pots:
+            if p.id == pot_id:
+                return p
+        raise KeyError(pot_id)
+
+    def to_json(self) -> str:
+        """Deterministic JSON text (sorted keys, fixed indentation, trailing newline)."""
+        return json.dumps(self.model_dump(mode="json", by_alias=True), indent=2, sort_keys=True) + "\n"
+
+
+def read_netlist(path: str | Path) -> Netlist:
+    return Netlist.model_validate_json(Path(path).read_text())
+
+
+def json_schema() -> dict:
+    """The netlist's JSON schema (documented in docs/netlist.md)."""
+    return Netlist.model_json_schema(by_alias=True)
+
+
+def wire_list(net: Netlist) -> list[tuple[str, str]]:
+    """Every patch cord as (from, to), in a stable order: pots fed first, then amplifier inputs."""
+    wires: list[tuple[str, str]] = []
+    for p in net.pots:
+        wires.append((_jack_name(net, p.source), f"{p.id} top"))
+    for a in net.amplifiers:
+        for inp in a.inputs:
+            src = f"{inp.pot} wiper" if inp.pot else _jack_name(net, inp.source)
+            wires.append((src, f"{a.id} in {inp.jack} (x{inp.weight})"))
+    wires.append((_jack_name(net, net.output.source), "servo amplifier command input (u_c)"))
+    return wires
+
+
+def _jack_name(net: Netlist, source: str) -> str:
+    for s in net.sensors:
+        if s.id == source:
+            return f"sensor {s.id} ({s.label})"
+    return f"{source} out"

@@ -1,0 +1,61 @@
+"""The cart-pendulum plant: physical parameters, nonlinear (eq. 2.16-2.19) and linear (eq. 2.28) models.
+
+States in SI units: s (m), theta (rad, 0 = upright), s_dot (m/s), theta_dot (rad/s).
+Input: the force F_U on the cart (N).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+PLANT_STATES = ("s", "theta", "s_dot", "theta_dot")
+
+
+@dataclass(frozen=True)
+class PlantParams:
+    """Table B.1: masses (kg), effective length (m), g (m/s^2), frictions, track length d (m)."""
+
+    M: float
+    m: float
+    l: float  # noqa: E741  (the thesis's symbol)
+    g: float
+    b_VF: float
+    c: float
+    d: float
+
+    def scaled(self, **factors: float) -> "PlantParams":
+        """A copy with named parameters multiplied by the given factors (for sweeps)."""
+        return replace(self, **{k: getattr(self, k) * f for k, f in factors.items()})
+
+
+def linear_matrices(p: PlantParams) -> tuple[np.ndarray, np.ndarray]:
+    """A (4x4) and B (4x1) of eq. 2.28, linearised about upright."""
+    M, m, l, g, b, c = p.M, p.m, p.l, p.g, p.b_VF, p.c
+    A = np.array(
+        [
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+            [0.0, -m * g / M, -b / M, c / (M * l)],
+            [0.0, (M + m) * g / (M * l), b / (M * l), -(M + m) * c / (M * m * l * l)],
+        ]
+    )
+    B = np.array([[0.0], [0.0], [1.0 / M], [-1.0 / (M * l)]])
+    return A, B
+
+
+def nonlinear_rhs(p: PlantParams, x: np.ndarray, force: float | np.ndarray) -> np.ndarray:
+    """dx/dt of eq. 2.16-2.19 for state x = [s, theta, s_dot, theta_dot] (x may be 4xN).
+
+    Eq. 2.18-2.19 print x_2^2 in the centripetal term; the derivation (eq. 2.14) has
+    x_4^2 (theta_dot squared), which is what is used here.
+    """
+    M, m, l, g, b, c = p.M, p.m, p.l, p.g, p.b_VF, p.c
+    _, th, sd, thd = x[0], x[1], x[2], x[3]
+    sin, cos = np.sin(th), np.cos(th)
+    den = (M + m) - m * cos * cos
+    bracket = -b * sd + m * l * thd * thd * sin + (c / l) * thd * cos - m * g * sin * cos + force
+    sdd = bracket / den
+    thdd = -c / (m * l * l) * thd + g / l * sin - cos * sdd / l
+    return np.array([sd, thd, sdd, thdd])

@@ -1,0 +1,5 @@
+"""`python -m patchgen` runs the command line."""
+
+from .cli import main
+
+main()

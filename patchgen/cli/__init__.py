@@ -1,0 +1,42 @@
+"""patchgen's command line: one click group, one module per command."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from .. import __version__
+from ..errors import InputError
+
+
+class _Group(click.Group):
+    """Turns an InputError anywhere into one line on stderr and its exit status."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except InputError as exc:
+            click.echo(f"patchgen: {exc.line()}", err=True)
+            sys.exit(exc.exit_status)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="patchgen")
+def cli() -> None:
+    """From an optimal cart-pendulum controller to a checked Comdyna GP-6 patch.
+
+    \b
+    patchgen design SPEC        LQR / Kalman / LTR design and its margins
+    """
+
+
+def _register() -> None:
+    from . import design as _design  # noqa: F401
+
+
+_register()
+
+
+def main() -> None:
+    cli(prog_name="patchgen")

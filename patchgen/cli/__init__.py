@@ -28,11 +28,13 @@ def cli() -> None:
 
     \b
     patchgen design SPEC        LQR / Kalman / LTR design and its margins
+    patchgen patch SPEC -o DIR  netlist, pot table, patch sheet, wiring diagram
     """
 
 
 def _register() -> None:
     from . import design as _design  # noqa: F401
+    from . import patch as _patch  # noqa: F401
 
 
 _register()

@@ -29,12 +29,14 @@ def cli() -> None:
     \b
     patchgen design SPEC        LQR / Kalman / LTR design and its margins
     patchgen patch SPEC -o DIR  netlist, pot table, patch sheet, wiring diagram
+    patchgen sweep SPEC         gains, margins and pots with parameters off by 10%
     """
 
 
 def _register() -> None:
     from . import design as _design  # noqa: F401
     from . import patch as _patch  # noqa: F401
+    from . import sweep as _sweep  # noqa: F401
 
 
 _register()

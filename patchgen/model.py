@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import control as ct
 import numpy as np
+import scipy.linalg as sla
 
 from .plant import PlantParams, linear_matrices
 from .spec import MEASURED, DesignSpec
@@ -88,9 +88,17 @@ def plant_zeros(spec: DesignSpec, output: str) -> np.ndarray:
     Ap, Bp = linear_matrices(plant_params(spec))
     C = np.zeros((1, 4))
     C[0, ["s", "theta", "s_dot", "theta_dot"].index(output)] = 1.0
-    z = ct.ss(Ap, Bp, C, 0).zeros()
-    z = z[np.isfinite(z)]
-    return _sorted(z)
+    return _sorted(transmission_zeros(Ap, Bp, C))
+
+
+def transmission_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """Finite zeros of a SISO (A, B, C, 0): generalised eigenvalues of the Rosenbrock pencil."""
+    n = A.shape[0]
+    M = np.block([[A, B], [C, np.zeros((1, 1))]])
+    N = np.zeros((n + 1, n + 1))
+    N[:n, :n] = np.eye(n)
+    z = sla.eigvals(M, N)
+    return z[np.isfinite(z) & (np.abs(z) < 1e12)]
 
 
 def _sorted(v: np.ndarray) -> np.ndarray:

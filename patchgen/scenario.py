@@ -72,8 +72,10 @@ class Disturbance(_Strict):
 
 
 class NoiseLevels(_Strict):
-    """Explicit noise levels, V rms: sensors and every amplifier's output."""
+    """Noise: as the profiles say, off, or explicit levels in V rms (sensors and every
+    amplifier's output; the levels count only in mode 'explicit')."""
 
+    mode: Literal["profile", "off", "explicit"] = "explicit"
     s: float = Field(default=0.0, ge=0)
     theta: float = Field(default=0.0, ge=0)
     s_dot: float = Field(default=0.0, ge=0)
@@ -93,13 +95,15 @@ class Scenario(_Strict):
     fall_angle_deg: float = Field(default=30.0, gt=0, le=180)
     initial: InitialState = InitialState()
     disturbances: list[Disturbance] = Field(default_factory=list)
-    noise: Literal["profile", "off"] | NoiseLevels = "profile"
+    noise: NoiseLevels = NoiseLevels(mode="profile")
     drift: Literal["profile", "off"] | float = "profile"
 
     @field_validator("noise", mode="before")
     @classmethod
     def _noise_word(cls, v):
-        if isinstance(v, str) and v not in ("profile", "off"):
+        if isinstance(v, str) and v in ("profile", "off"):
+            return {"mode": v}
+        if not isinstance(v, (dict, NoiseLevels)):
             raise ValueError("must be 'profile', 'off' or a table of V rms levels (s, theta, s_dot, amplifier)")
         return v
 

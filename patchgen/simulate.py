@@ -37,7 +37,7 @@ from .errors import InputError
 from .machine import MachineProfile
 from .netlist import Netlist
 from .plant import PlantParams
-from .scenario import NoiseLevels, Scenario
+from .scenario import Scenario
 
 PERCENTILES = (5, 50, 95)
 
@@ -222,10 +222,10 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     imp = machine.imperfections
 
     sens = bench.sensors
-    if ideal or scenario.noise == "off":
+    if ideal or scenario.noise.mode == "off":
         sensor_rms = {s: 0.0 for s in circuit.sensor_ids}
         amp_rms = 0.0
-    elif isinstance(scenario.noise, NoiseLevels):
+    elif scenario.noise.mode == "explicit":
         sensor_rms = {s: float(getattr(scenario.noise, s, 0.0)) for s in circuit.sensor_ids}
         amp_rms = scenario.noise.amplifier
     else:

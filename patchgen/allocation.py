@@ -85,8 +85,25 @@ def _plan_terms(real: Realization, machine: MachineProfile, source: str):
     return blocks, kept, notes, too_big
 
 
-def _search(blocks: list[Block], kept: dict[str, list[Term]]):
-    """Choose block polarities and shared inverters minimising amplifiers."""
+def _jacks_fit(blocks: list[Block], kept: dict[str, list[Term]], P: dict[str, int], inv: set[str],
+               pre: dict[str, set[str]], machine: MachineProfile | None) -> bool:
+    """Whether every stage's x1 and x10 inputs fit the roomiest amplifier of the machine."""
+    if machine is None:
+        return True
+    cap = {w: max(a.input_count(w) for a in machine.amplifiers) for w in (1, 10)}
+    for b in blocks:
+        main = {1: 1 if b.name in pre else 0, 10: 0}
+        staged = {1: 0, 10: 0}
+        for t in kept[b.name]:
+            w = 1 if abs(t.coeff) <= machine.pot_max + 1e-12 else 10
+            (staged if t.signal in pre.get(b.name, ()) else main)[w] += 1
+        if any(main[w] > cap[w] or staged[w] > cap[w] for w in (1, 10)):
+            return False
+    return True
+
+
+def _search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile | None = None):
+    """Choose block polarities and shared inverters minimising amplifiers (with inputs that fit)."""
     free = [b.name for b in blocks if b.name != "u_c"]
     best = None
     for pols in itertools.product((-1, 1), repeat=len(free)):
@@ -105,15 +122,19 @@ def _search(blocks: list[Block], kept: dict[str, list[Term]]):
                 pre = [b for b, m in mism.items() if not m <= set(inv)]
                 # a differentiator takes a single input: a pre-summer feeds it fine
                 cost = (len(inv) + len(pre), len(inv))
-                if best is None or cost < best[0]:
+                if best is not None and cost >= best[0]:
+                    continue
+                if _jacks_fit(blocks, kept, P, set(inv), {b: mism[b] - set(inv) for b in pre}, machine):
                     best = (cost, P, set(inv), {b: mism[b] - set(inv) for b in pre})
+    if best is None:  # nothing fits the jacks: keep the cheapest, the emitter names the shortfall
+        return _search(blocks, kept, None)
     return best[1], best[2], best[3]
 
 
 def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>") -> Netlist:
     """Place the realization on the machine; a shortfall raises ResourceError (one line)."""
     blocks, kept, notes, too_big = _plan_terms(real, machine, source)
-    P, inverted, pre = _search(blocks, kept)
+    P, inverted, pre = _search(blocks, kept, machine)
     stages: list[_Stage] = []
     wanted: dict[tuple[str, str, float], float] = {}
     for b in blocks:

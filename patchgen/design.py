@@ -39,7 +39,7 @@ class RhoTry:
 
 @dataclass(frozen=True)
 class Estimator:
-    kind: str  # "kalman" or "differentiator"
+    kind: str  # "kalman", "differentiator", "filtered_differentiator" or "reduced_observer"
     states: tuple[str, ...]
     L: np.ndarray | None  # n x m Kalman gain (kalman)
     poles: np.ndarray
@@ -47,6 +47,9 @@ class Estimator:
     rho_tries: list[RhoTry] = field(default_factory=list)
     margins_rho1: Margins | None = None  # LQG before recovery (rho = 1)
     rolloff_s: float | None = None
+    observer: object | None = None  # reduced_observer: patchgen.observer.ReducedObserver
+    chosen_from_noise: bool = False  # roll-off or pole chosen by patchgen.corner's rule
+    force_error_rms_N: float | None = None  # that rule's predicted figure
 
 
 @dataclass(frozen=True)
@@ -258,7 +261,54 @@ def design(spec: DesignSpec, plant: PlantParams | None = None, default_rolloff_s
         ctl = differentiator_controller(model, K, roll)
         lqg_m = loop_margins(*loop_with_controller(model, ctl))
         est = Estimator("differentiator", ("theta_dot",), None, np.array([-1.0 / roll + 0j]), None, [], None, roll)
+    elif e.kind in ("filtered_differentiator", "reduced_observer"):
+        est, ctl = _noise_shaped_estimator(spec, model, K)
+        lqg_m = loop_margins(*loop_with_controller(model, ctl))
     return Design(spec, model, Q, R, K, S, _sort(cl), open_loop_poles(model), zeros, lqr_m, est, ctl, lqg_m)
+
+
+def _noise_shaped_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray):
+    """A filtered differentiator or a reduced observer, its speed from the spec or, when the spec
+    leaves it out, from the bench's noise levels (patchgen.corner)."""
+    from . import corner
+    from .bench import load_bench
+    from .observer import ObserverError, reduced_observer, reduced_observer_controller
+
+    e = spec.estimator
+    fixed = e.rolloff_s if e.kind == "filtered_differentiator" else e.observer_pole
+    choice = None
+    if e.kind == "filtered_differentiator":
+        build = lambda r: differentiator_controller(model, K, r)  # noqa: E731
+        grid = corner.ROLLOFF_GRID_S
+    else:
+        build = lambda p: reduced_observer_controller(model, K, reduced_observer(model, p))  # noqa: E731
+        grid = corner.POLE_GRID
+    noise = corner.noise_model(spec, load_bench(spec.bench, spec.path), model)
+    if fixed is None:
+        try:
+            def robust(c):
+                mg = loop_margins(*loop_with_controller(model, c))
+                return mg.stable and mg.pm_deg is not None and mg.pm_deg >= corner.MIN_PM_DEG
+
+            choice = corner.choose(model, K, build, noise, grid, robust)
+        except ValueError as exc:
+            raise spec.error("estimator", str(exc)) from None
+        value = choice.value
+    else:
+        value = float(fixed)
+    try:
+        ctl = build(value)
+    except ObserverError as exc:
+        raise spec.error("estimator.observer_pole", str(exc)) from None
+    err = corner.force_error_rms(model, K, ctl, noise)
+    if e.kind == "filtered_differentiator":
+        est = Estimator(e.kind, ("theta_dot",), None, np.array([-1.0 / value + 0j]), None, [], None, value,
+                        None, fixed is None, err)
+    else:
+        obs = reduced_observer(model, value)
+        est = Estimator(e.kind, obs.unmeasured, obs.Lr, _sort(np.linalg.eigvals(obs.F)), None, [], None, None,
+                        obs, fixed is None, err)
+    return est, ctl
 
 
 def _sort(v):

@@ -15,6 +15,7 @@ its negative.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,14 +81,18 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
     sc = spec.actuator.state_scale
     if e == "kalman":
         return _kalman(design, machine, ks, KU, T)
+    if e == "reduced_observer":
+        return _reduced_observer(design, ks, KU, T, max(machine.input_weights) * machine.pot_max)
     if "theta_dot" in states:
         if e == "none":
             raise spec.error("estimator.kind", "theta_dot is not measured on the bench: choose "
-                             "\"differentiator\" or \"kalman\" to patch this design")
+                             "\"differentiator\", \"filtered_differentiator\", \"reduced_observer\" or "
+                             "\"kalman\" to patch this design")
         roll = design.estimator.rolloff_s
         scale["theta_dot"] = spec.theta_dot_scale()
         blocks.append(Block("theta_dot", "differentiate", (Term("theta", 1.0),), scale["theta_dot"], "rad/s",
-                            "theta_dot from theta (practical differentiator)",
+                            "theta_dot from theta (practical differentiator)" if e == "differentiator" else
+                            f"theta_dot from theta (differentiator, roll-off {roll:g} s chosen from the noise)",
                             T_d_s=scale["theta_dot"] / ks["theta"], rolloff_s=roll))
     for name, src in (("int_s", "s"), ("int_theta", "theta")):
         if name in states:
@@ -143,3 +148,74 @@ def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
     terms = tuple(Term(sig[s], -float(design.K[0, i]) / (scale[sig[s]] * KU)) for i, s in enumerate(model.states))
     blocks.append(Block("u_c", "sum", terms, 1.0, "V", "control voltage to the servo amplifier"))
     return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution)
+
+
+def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
+                      top: float) -> Realization:
+    """Reduced observer (patchgen.observer) on lag amplifiers: z_i' = -p z_i + sum F_ij z_j + G_i y
+    + H_i u, each a lag of time constant 1/p (its own feedback needs no pot).
+
+    Scaling: each z's voltage is scaled so its largest input coefficient is exactly ``top`` (the
+    largest a weighted input gives without a pot; the biggest voltage the inputs allow). The
+    observer gain Lr is folded into the u_c summer's sensor terms (w_hat = z + Lr y) unless a
+    folded coefficient would exceed ``top``; then w_hat gets its own summer, scaled so its input
+    and output coefficients are balanced (geometric mean)."""
+    spec = design.spec
+    model = design.model
+    obs = design.estimator.observer
+    w = list(obs.unmeasured)
+    y = list(model.measured)
+    tau = 1.0 / obs.pole
+    units = {"theta_dot": "rad/s", "actuator": "N"}
+    alpha: dict[str, float] = {}
+    for i in reversed(range(len(w))):
+        rates = [abs(obs.F[i, j]) / alpha[w[j]] for j in range(i + 1, len(w))]
+        rates += [abs(obs.G[i, k]) / ks[m] for k, m in enumerate(y)]
+        rates.append(abs(obs.H[i]) * KU)
+        alpha[w[i]] = top / (tau * max(rates))
+    blocks: list[Block] = []
+    for i, s in enumerate(w):
+        terms: list[Term] = []
+        for j in range(i + 1, len(w)):
+            if obs.F[i, j] != 0:
+                terms.append(Term(f"z_{w[j]}", _exact(tau * obs.F[i, j] * alpha[s] / alpha[w[j]], top)))
+        for k, m in enumerate(y):
+            if obs.G[i, k] != 0:
+                terms.append(Term(m, _exact(tau * obs.G[i, k] * alpha[s] / ks[m], top)))
+        if obs.H[i] != 0:
+            terms.append(Term("u_c", _exact(tau * obs.H[i] * alpha[s] * KU, top)))
+        blocks.append(Block(f"z_{s}", "lag", tuple(terms), alpha[s], units[s],
+                            f"reduced observer: {s} estimate minus its sensor part (pole {obs.pole:g} rad/s)",
+                            tau_s=tau))
+    scale = {f"z_{s}": alpha[s] for s in w}
+    for name, src in (("int_s", "s"), ("int_theta", "theta")):
+        if name in model.states:
+            scale[name] = ks[src]
+            blocks.append(Block(name, "integrate", (Term(src, T),), ks[src], "", f"integral of {src}"))
+    Ky = design.K[0, [model.index(m) for m in y]]
+    Kw = design.K[0, [model.index(s) for s in w]]
+    folded = Ky + Kw @ obs.Lr
+    fold = [s for i, s in enumerate(w)
+            if all(abs(folded[k]) / (ks[m] * KU) <= top for k, m in enumerate(y))]
+    ysum = Ky + sum((Kw[i] * obs.Lr[i] for i, s in enumerate(w) if s in fold), np.zeros(len(y)))
+    uterms = [Term(m, -float(ysum[k]) / (ks[m] * KU)) for k, m in enumerate(y)]
+    for i, s in enumerate(w):
+        if s in fold:
+            uterms.append(Term(f"z_{s}", -float(Kw[i]) / (alpha[s] * KU)))
+            continue
+        # w_hat = z + Lr y on its own summer, scale beta: inputs beta/alpha, Lr beta/k; out K/(beta K_U)
+        ins = max([1.0 / alpha[s]] + [abs(obs.Lr[i, k]) / ks[m] for k, m in enumerate(y)])
+        beta = math.sqrt(abs(Kw[i]) / (KU * ins))
+        hterms = [Term(f"z_{s}", beta / alpha[s])]
+        hterms += [Term(m, float(obs.Lr[i, k]) * beta / ks[m]) for k, m in enumerate(y) if obs.Lr[i, k] != 0]
+        blocks.append(Block(f"what_{s}", "sum", tuple(hterms), beta, units[s],
+                            f"reduced observer's estimate of {s} (z plus its sensor part)"))
+        uterms.append(Term(f"what_{s}", -float(Kw[i]) / (beta * KU)))
+    uterms += [Term(n, -design.gain(n) / (scale[n] * KU)) for n in model.states if n.startswith("int_")]
+    blocks.append(Block("u_c", "sum", tuple(uterms), 1.0, "V", "control voltage to the servo amplifier"))
+    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution)
+
+
+def _exact(c: float, top: float) -> float:
+    """A coefficient the scaling made +/-top, exactly (so the allocator patches it without a pot)."""
+    return math.copysign(top, c) if math.isclose(abs(c), top, rel_tol=1e-9) else c

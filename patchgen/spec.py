@@ -75,13 +75,16 @@ class IntegratorsSpec(_Strict):
 
 
 class EstimatorSpec(_Strict):
-    kind: Literal["none", "differentiator", "kalman"] = "none"
+    kind: Literal["none", "differentiator", "filtered_differentiator", "reduced_observer", "kalman"] = "none"
     W: Union[float, list[list[float]]] = 1.0
     V: Union[list[float], list[list[float]]] = [1.0, 1.0, 1.0]
     Gamma: Union[Literal["B"], list[float], list[list[float]]] = "B"
     rho: Union[float, Literal["auto"]] = 1.0
     rho_max: float = Field(default=1e12, gt=0)
-    rolloff_s: float | None = Field(default=None, gt=0, description="differentiator roll-off, s")
+    rolloff_s: float | None = Field(default=None, gt=0, description="differentiator roll-off, s "
+                                    "(filtered_differentiator: none = chosen from the bench noise)")
+    observer_pole: float | None = Field(default=None, gt=0, description="reduced_observer: error decay "
+                                        "rate, rad/s (none = chosen from the bench noise)")
 
 
 class PatchSpec(_Strict):

@@ -30,12 +30,14 @@ def cli() -> None:
     patchgen design SPEC        LQR / Kalman / LTR design and its margins
     patchgen patch SPEC -o DIR  netlist, pot table, patch sheet, wiring diagram
     patchgen sweep SPEC         gains, margins and pots with parameters off by 10%
+    patchgen recommend SPEC -o DIR  simulate every realisation on the bench, write the best patch
     """
 
 
 def _register() -> None:
     from . import design as _design  # noqa: F401
     from . import patch as _patch  # noqa: F401
+    from . import recommend as _recommend  # noqa: F401
     from . import sweep as _sweep  # noqa: F401
 
 

@@ -1,0 +1,101 @@
+"""`patchgen recommend SPEC -o DIR`: try every realisation that fits, simulate each on the bench,
+write the patch of the best with the comparison on its sheet."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import click
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from ..bench import load_bench
+from ..errors import InputError
+from ..machine import load_machine
+from ..outputs import write_files
+from ..pottable import pot_table
+from ..recommend import prepare, evaluate, Recommendation, table_markdown, table_rows
+from ..scenario import load_scenario
+from ..spec import load_spec
+from . import cli
+from .patch import patch_files
+
+DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "sims" / "hold-120s.toml"
+
+
+def _fmt(x, fmt, none="-"):
+    return none if x is None else (fmt.format(x) if math.isfinite(x) else "inf")
+
+
+@cli.command("recommend")
+@click.argument("spec", type=click.Path(dir_okay=False))
+@click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for the recommended patch (as patchgen patch writes it).")
+@click.option("--runs", default=200, show_default=True, type=click.IntRange(1, 100000),
+              help="Monte Carlo noise seeds per realisation.")
+@click.option("--scenario", "scenario_path", default=str(DEFAULT_SCENARIO), show_default="sims/hold-120s.toml",
+              type=click.Path(dir_okay=False), help="Scenario to simulate.")
+@click.option("--seed", default=None, type=int, help="Base seed (default: the scenario's).")
+@click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
+@click.option("--force", is_flag=True, help="Replace output files that already exist.")
+def recommend_cmd(spec, out_dir, runs, scenario_path, seed, as_json, force):
+    """Design, allocate and simulate each realisation of SPEC's estimator; write the best patch."""
+    sp = load_spec(spec)
+    machine = load_machine(sp.machine, sp.path)
+    bench = load_bench(sp.bench, sp.path)
+    scenario = load_scenario(scenario_path)
+    console = Console(stderr=as_json)
+    cands = prepare(sp, machine)
+    fit = [c for c in cands if c.netlist is not None]
+    done = []
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=Console(stderr=True), transient=True) as bar:
+        task = bar.add_task("Monte Carlo", total=runs * len(fit))
+        base = 0
+        for c in cands:
+            if c.netlist is None:
+                done.append(c)
+                continue
+            bar.update(task, description=f"Monte Carlo: {c.label}")
+            done.append(evaluate(c, bench, machine, scenario, runs, seed,
+                                 lambda n, b=base: bar.update(task, completed=b + n)))
+            base += runs
+    order = {c.label: i for i, c in enumerate(done)}
+    rec = Recommendation(sp, scenario, runs, scenario.seed if seed is None else seed,
+                         tuple(sorted(done, key=lambda c: c.rank_key(order[c.label]))))
+    best = rec.best
+    if best is None:
+        raise InputError(sp.path, "estimator", "no realisation fits the machine: "
+                         + "; ".join(f"{c.label}: {c.error}" for c in rec.ranked))
+    md = table_markdown(rec, machine.reference_V)
+    files = patch_files(best.design, machine, best.netlist, extra_sections=[("Why this patch", md)])
+    files["recommendation.md"] = f"# Why this patch\n\n{md}"
+    rows = table_rows(rec)
+    files["recommendation.json"] = json.dumps({"spec": sp.name, "scenario": scenario.name, "runs": runs,
+                                               "seed": rec.seed, "chosen": best.label, "candidates": rows},
+                                              indent=2, sort_keys=True) + "\n"
+    written = write_files(out_dir, files, force=force)
+    if as_json:
+        click.echo(files["recommendation.json"], nl=False)
+        return
+    t = Table(title=f"{sp.name}: realisations on the bench ({scenario.name}, {runs} seeds)", title_justify="left")
+    for col in ("rank", "realisation", "estimator", "held", "fallen", "tripped", "overload", "GM lo/up dB",
+                "PM", "swing V", "amps/pots"):
+        t.add_column(col, justify="left" if col in ("realisation", "estimator") else "right")
+    for r in rows:
+        if r["error"]:
+            t.add_row("-", r["realisation"], r["estimator"], f"[red]{r['error']}[/red]", *[""] * 7)
+            continue
+        t.add_row(str(r["rank"]), r["realisation"], r["estimator"], f"{r['fraction_ok']:.1%}",
+                  f"{r['fraction_fallen']:.1%}", f"{r['fraction_tripped']:.1%}", f"{r['fraction_overloaded']:.1%}",
+                  f"{_fmt(r['lower_gm_db'], '{:+.1f}', 'none')}/{_fmt(r['upper_gm_db'], '{:+.1f}', 'inf')}",
+                  _fmt(r["pm_deg"], "{:.1f}"), f"{r['worst_swing_V']:.2f}", f"{r['amplifiers']}/{r['pots']}")
+    Console(width=max(150, console.width)).print(t)
+    console.print(f"chosen: [bold]{best.label}[/bold]")
+    console.print(pot_table(best.netlist))
+    for n in best.netlist.notes:
+        console.print(f"[yellow]note:[/yellow] {n}")
+    console.print("wrote " + ", ".join(str(p) for p in written))

@@ -112,10 +112,29 @@ class BatchOutput:
     history_length: np.ndarray  # samples recorded per history run (a run ends at a trip)
 
 
-def run_batch(cfg: EngineConfig, seeds: np.ndarray, n_history: int) -> BatchOutput:
-    """Run one simulation per seed (in parallel threads); histories for the first n_history."""
-    runs = len(seeds)
+def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]) -> tuple[np.ndarray, np.ndarray]:
+    """Each run's random draws, from its own generator: the drift sign of each amplifier, then
+    standard normals (steps + 1, sensors + amplifiers) when any noise is on (float32: noise
+    needs no more, and it halves the memory traffic). Drawn by numpy outside the compiled loop:
+    its bulk normals are fast, and a run's draws do not depend on threads or batches."""
+    runs = len(rngs)
     n_amp = len(cfg.amp_kind)
+    noisy = bool(cfg.sensor_noise_std.any() or cfg.amp_noise_std.any())
+    signs = np.empty((runs, n_amp))
+    shape = (runs, cfg.n_steps + 1, len(cfg.sensor_state) + n_amp) if noisy else (runs, 0, 0)
+    gauss = np.empty(shape, dtype=np.float32)
+    for r, rng in enumerate(rngs):
+        signs[r] = np.where(rng.random(n_amp) < 0.5, 1.0, -1.0)
+        if noisy:
+            rng.standard_normal(out=gauss[r], dtype=np.float32)
+    return signs, gauss
+
+
+def run_batch(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray], n_history: int) -> BatchOutput:
+    """One run per row of ``draws`` (see draw_batch), in parallel threads, without the GIL;
+    histories for the first n_history runs."""
+    signs, gauss = draws
+    runs, n_amp = signs.shape
     n_samples = cfg.n_steps // cfg.stride + 2  # stride samples, and the last one off-stride
     out = BatchOutput(
         trip_time=np.full(runs, np.nan), fall_time=np.full(runs, np.nan),
@@ -127,7 +146,7 @@ def run_batch(cfg: EngineConfig, seeds: np.ndarray, n_history: int) -> BatchOutp
         history_length=np.zeros(n_history, dtype=np.int64),
     )
     _batch(
-        np.ascontiguousarray(seeds, dtype=np.uint32), cfg.dt, cfg.n_steps, cfg.stride, cfg.x0,
+        signs, gauss, cfg.dt, cfg.n_steps, cfg.stride, cfg.x0,
         cfg.plant, cfg.limit_switches,
         cfg.sensor_state, cfg.sensor_gain, cfg.sensor_noise_a, cfg.sensor_noise_std,
         cfg.amp_kind, cfg.in_ptr, cfg.in_src, cfg.in_gain, cfg.param1, cfg.param2, cfg.ic_V,
@@ -194,28 +213,25 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _one_run(r, seed, h, n_steps, stride, x0, p, limit_on,
+def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
              sensor_state, sensor_gain, sna, sns,
              amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,
              out_index, act, K_U, tau, dz, flim,
              dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
              trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final,
              hist, hist_len):
-    np.random.seed(seed)
     ns = sensor_state.shape[0]
     na = amp_kind.shape[0]
     half = p[6]
-    drift = np.empty(na)
-    for j in range(na):  # each integrating amplifier drifts one way, drawn per run
-        drift[j] = drift_mag[j] if np.random.random() < 0.5 else -drift_mag[j]
+    noisy = gauss.shape[0] > 0
+    drift = drift_mag * sign  # each integrating amplifier drifts one way, drawn per run
     nz_s = np.zeros(ns)
     nz_a = np.zeros(na)
-    for i in range(ns):  # start the noise in its stationary distribution
-        if sns[i] > 0.0:
-            nz_s[i] = np.random.normal() * sns[i] / math.sqrt(1.0 - sna[i] * sna[i])
-    for j in range(na):
-        if ans[j] > 0.0:
-            nz_a[j] = np.random.normal() * ans[j] / math.sqrt(1.0 - ana[j] * ana[j])
+    if noisy:  # start the noise in its stationary distribution
+        for i in range(ns):
+            nz_s[i] = gauss[0, i] * sns[i] / math.sqrt(1.0 - sna[i] * sna[i])
+        for j in range(na):
+            nz_a[j] = gauss[0, ns + j] * ans[j] / math.sqrt(1.0 - ana[j] * ana[j])
     xp = x0.copy()
     za = ic.copy()
     sig = np.zeros(ns + na)
@@ -248,13 +264,11 @@ def _one_run(r, seed, h, n_steps, stride, x0, p, limit_on,
     n = 0
     for n in range(n_steps + 1):
         t = n * h
-        if n > 0:  # new noise for this step
+        if noisy and n > 0:  # new noise for this step
             for i in range(ns):
-                if sns[i] > 0.0:
-                    nz_s[i] = sna[i] * nz_s[i] + sns[i] * np.random.normal()
+                nz_s[i] = sna[i] * nz_s[i] + sns[i] * gauss[n, i]
             for j in range(na):
-                if ans[j] > 0.0:
-                    nz_a[j] = ana[j] * nz_a[j] + ans[j] * np.random.normal()
+                nz_a[j] = ana[j] * nz_a[j] + ans[j] * gauss[n, ns + j]
         # disturbances averaged over the step (so an impulse keeps its area at any step)
         f_cart = 0.0
         f_tip = 0.0
@@ -374,16 +388,16 @@ def _one_run(r, seed, h, n_steps, stride, x0, p, limit_on,
         final[r, i] = xp[i]
 
 
-@nb.njit(cache=True, parallel=True, error_model="numpy")
-def _batch(seeds, h, n_steps, stride, x0, p, limit_on,
+@nb.njit(cache=True, parallel=True, nogil=True, error_model="numpy")
+def _batch(signs, gauss, h, n_steps, stride, x0, p, limit_on,
            sensor_state, sensor_gain, sna, sns,
            amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,
            out_index, act, K_U, tau, dz, flim,
            dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
            trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final, hist,
            hist_len):
-    for r in nb.prange(seeds.shape[0]):
-        _one_run(r, seeds[r], h, n_steps, stride, x0, p, limit_on,
+    for r in nb.prange(signs.shape[0]):
+        _one_run(r, signs[r], gauss[r], h, n_steps, stride, x0, p, limit_on,
                  sensor_state, sensor_gain, sna, sns,
                  amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat,
                  clip, out_index, act, K_U, tau, dz, flim,

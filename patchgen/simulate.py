@@ -22,6 +22,7 @@ import csv
 import io
 import json
 import math
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
@@ -32,7 +33,8 @@ import numpy as np
 from .bench import BenchProfile
 from .circuit import Circuit, compile_circuit
 from .engine import (ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, DEFAULT_DT_S, DIST_CART_FORCE, DIST_STEP,
-                     DIST_TIP_FORCE, HISTORY_CHANNELS, EngineConfig, noise_process, run_batch)
+                     DIST_TIP_FORCE, HISTORY_CHANNELS, EngineConfig, draw_batch, noise_process,
+                     run_batch)
 from .errors import InputError
 from .machine import MachineProfile
 from .netlist import Netlist
@@ -58,12 +60,12 @@ class Overload:
 
 @dataclass(frozen=True)
 class RunSummary:
-    """What one run did. Times are None when the event did not happen. A run ends at the
+    """What run ``run`` (random draws from numpy's default generator seeded [seed, run]) did.
+    Times are None when the event did not happen. A run ends at the
     scenario's end or at the limit-switch trip (the motor is off, the experiment over): the
     figures cover the run up to there."""
 
     run: int
-    seed: int
     held: bool  # neither fallen nor the limit switches tripped
     limit_switch_tripped: bool
     trip_time_s: float | None
@@ -148,8 +150,8 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
              progress: Callable[[int], None] | None = None) -> SimResult:
     """Simulate ``runs`` runs of the scenario (seed from the argument, else the scenario's).
 
-    Run i uses a seed derived from (seed, i), so run 0 of a Monte Carlo is the single run of the
-    same seed. ``keep_history`` keeps the first run's time histories. ``progress`` is called
+    Run i draws from ``numpy.random.default_rng([seed, i])``, so run 0 of a Monte Carlo is the
+    single run of the same seed. ``keep_history`` keeps the first run's time histories. ``progress`` is called
     with the number of runs done after each batch.
     """
     if runs < 1:
@@ -159,15 +161,25 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     if not 0 <= base_seed < 2**63:
         raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")
     cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal)
-    seeds = run_seeds(base_seed, runs)
 
     chunk = max(4 * numba.get_num_threads(), math.ceil(runs / 50))
+    starts = range(0, runs, chunk)
+
+    def draws(start: int):
+        return draw_batch(cfg, [np.random.default_rng([base_seed, i])
+                                for i in range(start, min(start + chunk, runs))])
+
     parts = []
-    for start in range(0, runs, chunk):
-        n_hist = 1 if keep_history and start == 0 else 0
-        parts.append(run_batch(cfg, seeds[start:start + chunk], n_hist))
-        if progress is not None:
-            progress(min(start + chunk, runs))
+    with ThreadPoolExecutor(max_workers=1) as pool:  # next batch's draws while this one runs
+        pending = pool.submit(draws, starts[0])
+        for k, start in enumerate(starts):
+            batch = pending.result()
+            if k + 1 < len(starts):
+                pending = pool.submit(draws, starts[k + 1])
+            parts.append(run_batch(cfg, batch, 1 if keep_history and start == 0 else 0))
+            del batch
+            if progress is not None:
+                progress(min(start + chunk, runs))
 
     def cat(name: str) -> np.ndarray:
         return np.concatenate([getattr(p, name) for p in parts])
@@ -178,7 +190,7 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     max_uc, max_f, final = cat("max_abs_u_c"), cat("max_abs_force"), cat("final_state")
     summaries = [
         RunSummary(
-            run=i, seed=int(seeds[i]),
+            run=i,
             held=bool(np.isnan(trip[i]) and np.isnan(fall[i])),
             limit_switch_tripped=bool(not np.isnan(trip[i])), trip_time_s=_opt(trip[i]),
             fallen=bool(not np.isnan(fall[i])), fall_time_s=_opt(fall[i]),
@@ -202,12 +214,6 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
         seed=base_seed, settings=settings, amplifiers=circuit.amp_ids, history=history,
         runs=summaries, distribution=_distribution(summaries, circuit.amp_ids),
     )
-
-
-def run_seeds(seed: int, runs: int) -> np.ndarray:
-    """The per-run generator seeds (32-bit) derived from one seed."""
-    return np.array([np.random.SeedSequence([seed, i]).generate_state(1, dtype=np.uint32)[0]
-                     for i in range(runs)], dtype=np.uint32)
 
 
 def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
@@ -369,11 +375,11 @@ def write_outputs(result: SimResult, out_dir: str | Path) -> list[Path]:
     path = out / "runs.csv"
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["run", "seed", "held", "limit_switch_tripped", "trip_time_s", "fallen",
+    w.writerow(["run", "held", "limit_switch_tripped", "trip_time_s", "fallen",
                 "fall_time_s", "max_abs_theta_deg", "max_abs_s_m", "rms_theta_deg",
                 "max_abs_u_c_V", "max_abs_force_N", "overloads"])
     for r in result.runs:
-        w.writerow([r.run, r.seed, int(r.held), int(r.limit_switch_tripped), _num(r.trip_time_s),
+        w.writerow([r.run, int(r.held), int(r.limit_switch_tripped), _num(r.trip_time_s),
                     int(r.fallen), _num(r.fall_time_s), _num(r.max_abs_theta_deg),
                     _num(r.max_abs_s_m), _num(r.rms_theta_deg), _num(r.max_abs_u_c_V),
                     _num(r.max_abs_force_N),

@@ -69,6 +69,11 @@ class Circuit:
         names = self.sensor_ids + self.amp_ids
         return names.index(name)
 
+    def time_rates(self) -> list[float]:
+        """1 / time constant of each lag and each differentiator's roll-off (1/s)."""
+        return [float(self.param2[j] if k == DIFFERENTIATOR else self.param1[j])
+                for j, k in enumerate(self.amp_kind) if k in (LAG, DIFFERENTIATOR)]
+
     def drifting(self) -> np.ndarray:
         """Mask of amplifiers whose capacitor integrates offset and bias (integrators, lags)."""
         return np.isin(self.amp_kind, _STATEFUL_OUTPUT)

@@ -10,10 +10,13 @@ profile describes. Noise is held over each step (zero-order hold) with the low-f
 density of the given rms over its bandwidth (``noise_process``). Disturbances are averaged over
 each step, so a push keeps its impulse whatever the step.
 
-Default step: ``DEFAULT_DT_S``, chosen by measurement (tests/test_engine.py; noise off, since a
-noise realisation depends on the step): halving 2 ms moves theta by at most 2e-5 rad RMS on the
-standard scenarios with the bench actuator (dead zone, lag, clipping: first-order events) and
-1e-10 rad ideal; at 5 ms the bench runs move by up to 1e-3 rad.
+Default step (``default_step``), chosen by measurement (tests/test_engine.py; noise off, since a
+noise realisation depends on the step): on the bench (dead zone, lag, clipping, switches: events
+that make RK4 first order) 2 ms, where halving moves theta by at most 2e-5 rad RMS on the standard
+scenarios (at 5 ms, up to 1e-3 rad); ideal (smooth) 10 ms, where halving moves theta by 1e-7
+rad RMS. Either way no more than the fastest time constant in the loop (a differentiator's
+roll-off, a lag, the actuator's tau): RK4 is stable to 2.8 time constants and damps such a
+mode within 2 % per step there.
 """
 
 from __future__ import annotations
@@ -27,11 +30,20 @@ import numpy as np
 from .circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER
 from .plant import PLANT_STATES
 
-DEFAULT_DT_S = 0.002
-"""Fixed integration step (s) when a scenario gives none (see the module docstring)."""
+BENCH_DT_S = 0.002
+IDEAL_DT_S = 0.01
+STEPS_PER_TIME_CONSTANT = 1.0
+
+
+def default_step(time_constants: list[float], ideal: bool) -> float:
+    """The fixed step (s) when a scenario gives none (see the module docstring)."""
+    base = IDEAL_DT_S if ideal else BENCH_DT_S
+    return min([base] + [tc / STEPS_PER_TIME_CONSTANT for tc in time_constants if tc > 0])
 
 ACT_GAIN, ACT_LAG, ACT_LAG_ZERO = 0, 1, 2
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
+# fast-math without the no-NaN/no-infinity assumptions (NaN marks "never", inf "no limit")
+_FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
 S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
 
 # history channels before the amplifier outputs
@@ -145,22 +157,23 @@ def run_batch(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray], n_history
         history=np.zeros((n_history, n_samples, len(HISTORY_CHANNELS) + n_amp)),
         history_length=np.zeros(n_history, dtype=np.int64),
     )
-    _batch(
-        signs, gauss, cfg.dt, cfg.n_steps, cfg.stride, cfg.x0,
-        cfg.plant, cfg.limit_switches,
-        cfg.sensor_state, cfg.sensor_gain, cfg.sensor_noise_a, cfg.sensor_noise_std,
-        cfg.amp_kind, cfg.in_ptr, cfg.in_src, cfg.in_gain, cfg.param1, cfg.param2, cfg.ic_V,
-        cfg.drift, cfg.amp_noise_a, cfg.amp_noise_std, cfg.saturation_V, cfg.clip,
-        cfg.output_index, cfg.actuator, cfg.K_U, cfg.tau, cfg.dead_zone_V, cfg.force_limit_N,
-        cfg.dist_kind, cfg.dist_t0, cfg.dist_t1, cfg.dist_value, cfg.fall_angle,
-        out.trip_time, out.fall_time, out.max_abs_theta, out.max_abs_s, out.rms_theta,
-        out.max_abs_u_c, out.max_abs_force, out.overload_first, out.overload_time,
-        out.final_state, out.history, out.history_length,
-    )
+    args = (cfg.dt, cfg.n_steps, cfg.stride, cfg.x0, cfg.plant, cfg.limit_switches,
+            cfg.sensor_state, cfg.sensor_gain, cfg.sensor_noise_a, cfg.sensor_noise_std,
+            cfg.amp_kind, cfg.in_ptr, cfg.in_src, cfg.in_gain, cfg.param1, cfg.param2, cfg.ic_V,
+            cfg.drift, cfg.amp_noise_a, cfg.amp_noise_std, cfg.saturation_V, cfg.clip,
+            cfg.output_index, cfg.actuator, cfg.K_U, cfg.tau, cfg.dead_zone_V, cfg.force_limit_N,
+            cfg.dist_kind, cfg.dist_t0, cfg.dist_t1, cfg.dist_value, cfg.fall_angle,
+            out.trip_time, out.fall_time, out.max_abs_theta, out.max_abs_s, out.rms_theta,
+            out.max_abs_u_c, out.max_abs_force, out.overload_first, out.overload_time,
+            out.final_state, out.history, out.history_length)
+    if runs == 1:  # no thread launch: it costs more than a lone run on a busy machine
+        _one_run(0, signs[0], gauss[0], *args)
+    else:
+        _batch(signs, gauss, *args)
     return out
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def plant_rhs(p, th, sd, thd, force, tip_force):
     """Eq. 2.16-2.19 (as patchgen.plant.nonlinear_rhs) plus a horizontal force at the pendulum
     tip (distance l): generalised forces tip_force on s and tip_force * l * cos(theta) on theta.
@@ -173,7 +186,7 @@ def plant_rhs(p, th, sd, thd, force, tip_force):
     return sd, thd, sdd, -c / (m * l * l) * thd + g / l * sn + tip_force * cs / (m * l) - cs * sdd / l
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
 def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_ptr, in_src,
              in_gain, param1, param2, drift, sat, clip, sig, raw, dz_out):
     """Evaluate sensors and amplifiers in order: sig (clipped if clip), raw (before clipping),
@@ -212,7 +225,7 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
     return 0
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
              sensor_state, sensor_gain, sna, sns,
              amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,
@@ -388,7 +401,7 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
         final[r, i] = xp[i]
 
 
-@nb.njit(cache=True, parallel=True, nogil=True, error_model="numpy")
+@nb.njit(cache=True, parallel=True, nogil=True, error_model="numpy", fastmath=_FAST)
 def _batch(signs, gauss, h, n_steps, stride, x0, p, limit_on,
            sensor_state, sensor_gain, sna, sns,
            amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,

@@ -32,9 +32,9 @@ import numpy as np
 
 from .bench import BenchProfile
 from .circuit import Circuit, compile_circuit
-from .engine import (ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, DEFAULT_DT_S, DIST_CART_FORCE, DIST_STEP,
-                     DIST_TIP_FORCE, HISTORY_CHANNELS, EngineConfig, draw_batch, noise_process,
-                     run_batch)
+from .engine import (ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, DIST_CART_FORCE, DIST_STEP,
+                     DIST_TIP_FORCE, HISTORY_CHANNELS, EngineConfig, default_step, draw_batch,
+                     noise_process, run_batch)
 from .errors import InputError
 from .machine import MachineProfile
 from .netlist import Netlist
@@ -162,7 +162,7 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
         raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")
     cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal)
 
-    chunk = max(4 * numba.get_num_threads(), math.ceil(runs / 50))
+    chunk = max(4 * numba.get_num_threads(), math.ceil(runs / 20))
     starts = range(0, runs, chunk)
 
     def draws(start: int):
@@ -171,13 +171,14 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
 
     parts = []
     with ThreadPoolExecutor(max_workers=1) as pool:  # next batch's draws while this one runs
-        pending = pool.submit(draws, starts[0])
+        pending = None
+        batch = draws(starts[0])
         for k, start in enumerate(starts):
-            batch = pending.result()
+            if pending is not None:
+                batch = pending.result()
             if k + 1 < len(starts):
                 pending = pool.submit(draws, starts[k + 1])
             parts.append(run_batch(cfg, batch, 1 if keep_history and start == 0 else 0))
-            del batch
             if progress is not None:
                 progress(min(start + chunk, runs))
 
@@ -221,7 +222,10 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
                   ideal: bool = False, dt: float | None = None) -> tuple[EngineConfig, SimSettings]:
     """Resolve profiles, scenario and ``ideal`` into the engine's arrays (and a readable record)."""
     src = f"scenario {scenario.name}"
-    step = dt or scenario.dt_s or DEFAULT_DT_S
+    fastest = [1.0 / v for v in circuit.time_rates() if v > 0]
+    if not ideal and bench.actuator.model != "gain":
+        fastest.append(bench.actuator.tau)
+    step = dt or scenario.dt_s or default_step(fastest, ideal)
     n_steps = max(1, math.ceil(scenario.duration_s / step - 1e-9))
     step = scenario.duration_s / n_steps
     stride = max(1, round(scenario.record_dt_s / step))

@@ -158,8 +158,8 @@ def main() -> None:
     for rtol in (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10):
         t_pc, th = pc(rtol)
         err = math.sqrt(np.mean((th - ref) ** 2))
-        print(f"   python-control RK45 rtol {rtol:.0e}: {t_pc:7.2f} s, theta error {err:.2e} rad RMS, "
-              f"ratio {t_pc / t_pg:8.0f}x")
+        print(f"   python-control RK45 rtol {rtol:.0e}: {t_pc:7.2f} s, "
+              f"theta error {err:.2e} rad RMS, ratio {t_pc / t_pg:8.0f}x")
         if equal is None and err <= err_pg:
             equal = (rtol, t_pc, err)
     if equal is None:

@@ -128,7 +128,8 @@ def compile_circuit(net: Netlist, machine: MachineProfile) -> Circuit:
             p2.append(0.0)
         elif kd == LAG:
             if not a.tau_s or a.tau_s <= 0:
-                raise InputError(src, f"amplifiers[{position[aid]}].tau_s", "a lag amplifier needs tau_s > 0")
+                raise InputError(src, f"amplifiers[{position[aid]}].tau_s",
+                                 "a lag amplifier needs tau_s > 0")
             p1.append(1.0 / a.tau_s)
             p2.append(0.0)
         elif kd == DIFFERENTIATOR:
@@ -143,7 +144,8 @@ def compile_circuit(net: Netlist, machine: MachineProfile) -> Circuit:
     return Circuit(
         design=net.design,
         sensor_ids=sensor_ids,
-        sensor_state=np.array([PLANT_STATES.index(s.quantity) for s in net.sensors], dtype=np.int64),
+        sensor_state=np.array([PLANT_STATES.index(s.quantity) for s in net.sensors],
+                              dtype=np.int64),
         sensor_gain=np.array([s.volts_per_unit for s in net.sensors], dtype=np.float64),
         amp_ids=tuple(order),
         amp_kind=np.array(kind, dtype=np.int64),

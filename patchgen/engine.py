@@ -142,7 +142,8 @@ def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]) -> tuple[np.n
     return signs, gauss
 
 
-def run_batch(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray], n_history: int) -> BatchOutput:
+def run_batch(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray],
+              n_history: int) -> BatchOutput:
     """One run per row of ``draws`` (see draw_batch), in parallel threads, without the GIL;
     histories for the first n_history runs."""
     signs, gauss = draws
@@ -183,7 +184,8 @@ def plant_rhs(p, th, sd, thd, force, tip_force):
     den = (M + m) - m * cs * cs
     bracket = -b * sd + m * l * thd * thd * sn + (c / l) * thd * cs - m * g * sn * cs + force
     sdd = (bracket + tip_force * sn * sn) / den
-    return sd, thd, sdd, -c / (m * l * l) * thd + g / l * sn + tip_force * cs / (m * l) - cs * sdd / l
+    thdd = -c / (m * l * l) * thd + g / l * sn + tip_force * cs / (m * l) - cs * sdd / l
+    return sd, thd, sdd, thdd
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")

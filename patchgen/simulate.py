@@ -131,7 +131,7 @@ class SimResult:
         """Everything but the histories, as plain JSON-able data."""
         return {
             "design": self.design,
-            "scenario": self.scenario.model_dump(mode="json"),
+            "scenario": self.scenario.model_dump(mode="json", exclude_none=True),
             "machine": self.machine,
             "bench": self.bench,
             "ideal": self.ideal,
@@ -151,8 +151,8 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     """Simulate ``runs`` runs of the scenario (seed from the argument, else the scenario's).
 
     Run i draws from ``numpy.random.default_rng([seed, i])``, so run 0 of a Monte Carlo is the
-    single run of the same seed. ``keep_history`` keeps the first run's time histories. ``progress`` is called
-    with the number of runs done after each batch.
+    single run of the same seed. ``keep_history`` keeps the first run's time histories.
+    ``progress`` is called with the number of runs done after each batch.
     """
     if runs < 1:
         raise InputError("--runs", "", f"must be at least 1 (got {runs})")
@@ -236,12 +236,13 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         sensor_rms = {s: 0.0 for s in circuit.sensor_ids}
         amp_rms = 0.0
     elif scenario.noise.mode == "explicit":
-        sensor_rms = {s: float(getattr(scenario.noise, s, 0.0)) for s in circuit.sensor_ids}
-        amp_rms = scenario.noise.amplifier
+        sensor_rms = {s: scenario.noise.level(s) for s in circuit.sensor_ids}
+        amp_rms = scenario.noise.level("amplifier")
     else:
         sensor_rms = {s: float(sens.noise_V_rms.get(s, 0.0)) for s in circuit.sensor_ids}
         amp_rms = imp.amplifier_noise_V_rms
-    s_proc = [noise_process(sensor_rms[s], sens.noise_bandwidth_Hz, step) for s in circuit.sensor_ids]
+    s_proc = [noise_process(sensor_rms[s], sens.noise_bandwidth_Hz, step)
+              for s in circuit.sensor_ids]
     a_proc = noise_process(amp_rms, imp.noise_bandwidth_Hz, step)
 
     if ideal or scenario.drift == "off":
@@ -260,7 +261,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         tau, dead, flim = act.tau, act.dead_zone_V, act.force_limit_N
         if model != ACT_GAIN and tau <= 0:
             if model == ACT_LAG_ZERO:
-                raise InputError(f"bench {bench.id}", "actuator.tau", "model lag_zero needs tau > 0")
+                raise InputError(f"bench {bench.id}", "actuator.tau",
+                                 "model lag_zero needs tau > 0")
             model = ACT_GAIN
         act_text = (f"{act.model}: K_U = {act.K_U} N/V, tau = {tau} s, "
                     f"dead zone +/-{dead} V, force limit +/-{flim} N")
@@ -287,7 +289,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         plant=np.array([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c, plant.d / 2]),
         limit_switches=bool(bench.track.limit_switches),
         sensor_state=circuit.sensor_state, sensor_gain=circuit.sensor_gain,
-        sensor_noise_a=np.array([p[0] for p in s_proc]), sensor_noise_std=np.array([p[1] for p in s_proc]),
+        sensor_noise_a=np.array([p[0] for p in s_proc]),
+        sensor_noise_std=np.array([p[1] for p in s_proc]),
         amp_kind=circuit.amp_kind, in_ptr=circuit.in_ptr, in_src=circuit.in_src,
         in_gain=circuit.in_gain, param1=circuit.param1, param2=circuit.param2, ic_V=circuit.ic_V,
         drift=np.where(circuit.drifting(), drift, 0.0),

@@ -34,12 +34,6 @@ BENCH_DT_S = 0.002
 IDEAL_DT_S = 0.01
 STEPS_PER_TIME_CONSTANT = 1.0
 
-
-def default_step(time_constants: list[float], ideal: bool) -> float:
-    """The fixed step (s) when a scenario gives none (see the module docstring)."""
-    base = IDEAL_DT_S if ideal else BENCH_DT_S
-    return min([base] + [tc / STEPS_PER_TIME_CONSTANT for tc in time_constants if tc > 0])
-
 ACT_GAIN, ACT_LAG, ACT_LAG_ZERO = 0, 1, 2
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 # fast-math without the no-NaN/no-infinity assumptions (NaN marks "never", inf "no limit")
@@ -87,6 +81,12 @@ class EngineConfig:
     dist_t1: np.ndarray
     dist_value: np.ndarray
     fall_angle: float  # rad
+
+
+def default_step(time_constants: list[float], ideal: bool) -> float:
+    """The fixed step (s) when a scenario gives none (see the module docstring)."""
+    base = IDEAL_DT_S if ideal else BENCH_DT_S
+    return min([base] + [tc / STEPS_PER_TIME_CONSTANT for tc in time_constants if tc > 0])
 
 
 def noise_process(rms: float, bandwidth_Hz: float, dt: float) -> tuple[float, float]:

@@ -69,6 +69,11 @@ class Circuit:
         names = self.sensor_ids + self.amp_ids
         return names.index(name)
 
+    def time_rates(self) -> list[float]:
+        """1 / time constant of each lag and each differentiator's roll-off (1/s)."""
+        return [float(self.param2[j] if k == DIFFERENTIATOR else self.param1[j])
+                for j, k in enumerate(self.amp_kind) if k in (LAG, DIFFERENTIATOR)]
+
     def drifting(self) -> np.ndarray:
         """Mask of amplifiers whose capacitor integrates offset and bias (integrators, lags)."""
         return np.isin(self.amp_kind, _STATEFUL_OUTPUT)
@@ -123,7 +128,8 @@ def compile_circuit(net: Netlist, machine: MachineProfile) -> Circuit:
             p2.append(0.0)
         elif kd == LAG:
             if not a.tau_s or a.tau_s <= 0:
-                raise InputError(src, f"amplifiers[{position[aid]}].tau_s", "a lag amplifier needs tau_s > 0")
+                raise InputError(src, f"amplifiers[{position[aid]}].tau_s",
+                                 "a lag amplifier needs tau_s > 0")
             p1.append(1.0 / a.tau_s)
             p2.append(0.0)
         elif kd == DIFFERENTIATOR:
@@ -138,7 +144,8 @@ def compile_circuit(net: Netlist, machine: MachineProfile) -> Circuit:
     return Circuit(
         design=net.design,
         sensor_ids=sensor_ids,
-        sensor_state=np.array([PLANT_STATES.index(s.quantity) for s in net.sensors], dtype=np.int64),
+        sensor_state=np.array([PLANT_STATES.index(s.quantity) for s in net.sensors],
+                              dtype=np.int64),
         sensor_gain=np.array([s.volts_per_unit for s in net.sensors], dtype=np.float64),
         amp_ids=tuple(order),
         amp_kind=np.array(kind, dtype=np.int64),

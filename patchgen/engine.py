@@ -10,10 +10,13 @@ profile describes. Noise is held over each step (zero-order hold) with the low-f
 density of the given rms over its bandwidth (``noise_process``). Disturbances are averaged over
 each step, so a push keeps its impulse whatever the step.
 
-Default step: ``DEFAULT_DT_S``, chosen by measurement (tests/test_engine.py; noise off, since a
-noise realisation depends on the step): halving 2 ms moves theta by at most 2e-5 rad RMS on the
-standard scenarios with the bench actuator (dead zone, lag, clipping: first-order events) and
-1e-10 rad ideal; at 5 ms the bench runs move by up to 1e-3 rad.
+Default step (``default_step``), chosen by measurement (tests/test_engine.py; noise off, since a
+noise realisation depends on the step): on the bench (dead zone, lag, clipping, switches: events
+that make RK4 first order) 2 ms, where halving moves theta by at most 2e-5 rad RMS on the standard
+scenarios (at 5 ms, up to 1e-3 rad); ideal (smooth) 10 ms, where halving moves theta by 1e-7
+rad RMS. Either way no more than the fastest time constant in the loop (a differentiator's
+roll-off, a lag, the actuator's tau): RK4 is stable to 2.8 time constants and damps such a
+mode within 2 % per step there.
 """
 
 from __future__ import annotations
@@ -27,11 +30,14 @@ import numpy as np
 from .circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER
 from .plant import PLANT_STATES
 
-DEFAULT_DT_S = 0.002
-"""Fixed integration step (s) when a scenario gives none (see the module docstring)."""
+BENCH_DT_S = 0.002
+IDEAL_DT_S = 0.01
+STEPS_PER_TIME_CONSTANT = 1.0
 
 ACT_GAIN, ACT_LAG, ACT_LAG_ZERO = 0, 1, 2
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
+# fast-math without the no-NaN/no-infinity assumptions (NaN marks "never", inf "no limit")
+_FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
 S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
 
 # history channels before the amplifier outputs
@@ -77,6 +83,12 @@ class EngineConfig:
     fall_angle: float  # rad
 
 
+def default_step(time_constants: list[float], ideal: bool) -> float:
+    """The fixed step (s) when a scenario gives none (see the module docstring)."""
+    base = IDEAL_DT_S if ideal else BENCH_DT_S
+    return min([base] + [tc / STEPS_PER_TIME_CONSTANT for tc in time_constants if tc > 0])
+
+
 def noise_process(rms: float, bandwidth_Hz: float, dt: float) -> tuple[float, float]:
     """(memory a, innovation std) of held noise n_k+1 = a n_k + std w_k that has rms ``rms``
     over ``bandwidth_Hz``, i.e. one-sided density rms^2 / B at low frequency, at step dt.
@@ -112,10 +124,30 @@ class BatchOutput:
     history_length: np.ndarray  # samples recorded per history run (a run ends at a trip)
 
 
-def run_batch(cfg: EngineConfig, seeds: np.ndarray, n_history: int) -> BatchOutput:
-    """Run one simulation per seed (in parallel threads); histories for the first n_history."""
-    runs = len(seeds)
+def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]) -> tuple[np.ndarray, np.ndarray]:
+    """Each run's random draws, from its own generator: the drift sign of each amplifier, then
+    standard normals (steps + 1, sensors + amplifiers) when any noise is on (float32: noise
+    needs no more, and it halves the memory traffic). Drawn by numpy outside the compiled loop:
+    its bulk normals are fast, and a run's draws do not depend on threads or batches."""
+    runs = len(rngs)
     n_amp = len(cfg.amp_kind)
+    noisy = bool(cfg.sensor_noise_std.any() or cfg.amp_noise_std.any())
+    signs = np.empty((runs, n_amp))
+    shape = (runs, cfg.n_steps + 1, len(cfg.sensor_state) + n_amp) if noisy else (runs, 0, 0)
+    gauss = np.empty(shape, dtype=np.float32)
+    for r, rng in enumerate(rngs):
+        signs[r] = np.where(rng.random(n_amp) < 0.5, 1.0, -1.0)
+        if noisy:
+            rng.standard_normal(out=gauss[r], dtype=np.float32)
+    return signs, gauss
+
+
+def run_batch(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray],
+              n_history: int) -> BatchOutput:
+    """One run per row of ``draws`` (see draw_batch), in parallel threads, without the GIL;
+    histories for the first n_history runs."""
+    signs, gauss = draws
+    runs, n_amp = signs.shape
     n_samples = cfg.n_steps // cfg.stride + 2  # stride samples, and the last one off-stride
     out = BatchOutput(
         trip_time=np.full(runs, np.nan), fall_time=np.full(runs, np.nan),
@@ -126,22 +158,23 @@ def run_batch(cfg: EngineConfig, seeds: np.ndarray, n_history: int) -> BatchOutp
         history=np.zeros((n_history, n_samples, len(HISTORY_CHANNELS) + n_amp)),
         history_length=np.zeros(n_history, dtype=np.int64),
     )
-    _batch(
-        np.ascontiguousarray(seeds, dtype=np.uint32), cfg.dt, cfg.n_steps, cfg.stride, cfg.x0,
-        cfg.plant, cfg.limit_switches,
-        cfg.sensor_state, cfg.sensor_gain, cfg.sensor_noise_a, cfg.sensor_noise_std,
-        cfg.amp_kind, cfg.in_ptr, cfg.in_src, cfg.in_gain, cfg.param1, cfg.param2, cfg.ic_V,
-        cfg.drift, cfg.amp_noise_a, cfg.amp_noise_std, cfg.saturation_V, cfg.clip,
-        cfg.output_index, cfg.actuator, cfg.K_U, cfg.tau, cfg.dead_zone_V, cfg.force_limit_N,
-        cfg.dist_kind, cfg.dist_t0, cfg.dist_t1, cfg.dist_value, cfg.fall_angle,
-        out.trip_time, out.fall_time, out.max_abs_theta, out.max_abs_s, out.rms_theta,
-        out.max_abs_u_c, out.max_abs_force, out.overload_first, out.overload_time,
-        out.final_state, out.history, out.history_length,
-    )
+    args = (cfg.dt, cfg.n_steps, cfg.stride, cfg.x0, cfg.plant, cfg.limit_switches,
+            cfg.sensor_state, cfg.sensor_gain, cfg.sensor_noise_a, cfg.sensor_noise_std,
+            cfg.amp_kind, cfg.in_ptr, cfg.in_src, cfg.in_gain, cfg.param1, cfg.param2, cfg.ic_V,
+            cfg.drift, cfg.amp_noise_a, cfg.amp_noise_std, cfg.saturation_V, cfg.clip,
+            cfg.output_index, cfg.actuator, cfg.K_U, cfg.tau, cfg.dead_zone_V, cfg.force_limit_N,
+            cfg.dist_kind, cfg.dist_t0, cfg.dist_t1, cfg.dist_value, cfg.fall_angle,
+            out.trip_time, out.fall_time, out.max_abs_theta, out.max_abs_s, out.rms_theta,
+            out.max_abs_u_c, out.max_abs_force, out.overload_first, out.overload_time,
+            out.final_state, out.history, out.history_length)
+    if runs == 1:  # no thread launch: it costs more than a lone run on a busy machine
+        _one_run(0, signs[0], gauss[0], *args)
+    else:
+        _batch(signs, gauss, *args)
     return out
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def plant_rhs(p, th, sd, thd, force, tip_force):
     """Eq. 2.16-2.19 (as patchgen.plant.nonlinear_rhs) plus a horizontal force at the pendulum
     tip (distance l): generalised forces tip_force on s and tip_force * l * cos(theta) on theta.
@@ -151,10 +184,11 @@ def plant_rhs(p, th, sd, thd, force, tip_force):
     den = (M + m) - m * cs * cs
     bracket = -b * sd + m * l * thd * thd * sn + (c / l) * thd * cs - m * g * sn * cs + force
     sdd = (bracket + tip_force * sn * sn) / den
-    return sd, thd, sdd, -c / (m * l * l) * thd + g / l * sn + tip_force * cs / (m * l) - cs * sdd / l
+    thdd = -c / (m * l * l) * thd + g / l * sn + tip_force * cs / (m * l) - cs * sdd / l
+    return sd, thd, sdd, thdd
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
 def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_ptr, in_src,
              in_gain, param1, param2, drift, sat, clip, sig, raw, dz_out):
     """Evaluate sensors and amplifiers in order: sig (clipped if clip), raw (before clipping),
@@ -193,29 +227,26 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
     return 0
 
 
-@nb.njit(cache=True, error_model="numpy")
-def _one_run(r, seed, h, n_steps, stride, x0, p, limit_on,
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
              sensor_state, sensor_gain, sna, sns,
              amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,
              out_index, act, K_U, tau, dz, flim,
              dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
              trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final,
              hist, hist_len):
-    np.random.seed(seed)
     ns = sensor_state.shape[0]
     na = amp_kind.shape[0]
     half = p[6]
-    drift = np.empty(na)
-    for j in range(na):  # each integrating amplifier drifts one way, drawn per run
-        drift[j] = drift_mag[j] if np.random.random() < 0.5 else -drift_mag[j]
+    noisy = gauss.shape[0] > 0
+    drift = drift_mag * sign  # each integrating amplifier drifts one way, drawn per run
     nz_s = np.zeros(ns)
     nz_a = np.zeros(na)
-    for i in range(ns):  # start the noise in its stationary distribution
-        if sns[i] > 0.0:
-            nz_s[i] = np.random.normal() * sns[i] / math.sqrt(1.0 - sna[i] * sna[i])
-    for j in range(na):
-        if ans[j] > 0.0:
-            nz_a[j] = np.random.normal() * ans[j] / math.sqrt(1.0 - ana[j] * ana[j])
+    if noisy:  # start the noise in its stationary distribution
+        for i in range(ns):
+            nz_s[i] = gauss[0, i] * sns[i] / math.sqrt(1.0 - sna[i] * sna[i])
+        for j in range(na):
+            nz_a[j] = gauss[0, ns + j] * ans[j] / math.sqrt(1.0 - ana[j] * ana[j])
     xp = x0.copy()
     za = ic.copy()
     sig = np.zeros(ns + na)
@@ -248,13 +279,11 @@ def _one_run(r, seed, h, n_steps, stride, x0, p, limit_on,
     n = 0
     for n in range(n_steps + 1):
         t = n * h
-        if n > 0:  # new noise for this step
+        if noisy and n > 0:  # new noise for this step
             for i in range(ns):
-                if sns[i] > 0.0:
-                    nz_s[i] = sna[i] * nz_s[i] + sns[i] * np.random.normal()
+                nz_s[i] = sna[i] * nz_s[i] + sns[i] * gauss[n, i]
             for j in range(na):
-                if ans[j] > 0.0:
-                    nz_a[j] = ana[j] * nz_a[j] + ans[j] * np.random.normal()
+                nz_a[j] = ana[j] * nz_a[j] + ans[j] * gauss[n, ns + j]
         # disturbances averaged over the step (so an impulse keeps its area at any step)
         f_cart = 0.0
         f_tip = 0.0
@@ -374,16 +403,16 @@ def _one_run(r, seed, h, n_steps, stride, x0, p, limit_on,
         final[r, i] = xp[i]
 
 
-@nb.njit(cache=True, parallel=True, error_model="numpy")
-def _batch(seeds, h, n_steps, stride, x0, p, limit_on,
+@nb.njit(cache=True, parallel=True, nogil=True, error_model="numpy", fastmath=_FAST)
+def _batch(signs, gauss, h, n_steps, stride, x0, p, limit_on,
            sensor_state, sensor_gain, sna, sns,
            amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,
            out_index, act, K_U, tau, dz, flim,
            dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
            trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final, hist,
            hist_len):
-    for r in nb.prange(seeds.shape[0]):
-        _one_run(r, seeds[r], h, n_steps, stride, x0, p, limit_on,
+    for r in nb.prange(signs.shape[0]):
+        _one_run(r, signs[r], gauss[r], h, n_steps, stride, x0, p, limit_on,
                  sensor_state, sensor_gain, sna, sns,
                  amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat,
                  clip, out_index, act, K_U, tau, dz, flim,

@@ -64,10 +64,9 @@ class Disturbance(_Strict):
         for name in _NEEDS[self.kind]:
             if getattr(self, name) is None:
                 raise ValueError(f"{name} is needed for kind {self.kind!r}")
-        for other, names in _NEEDS.items():
-            for name in names:
-                if other != self.kind and name not in _NEEDS[self.kind] and getattr(self, name) is not None:
-                    raise ValueError(f"{name} does not apply to kind {self.kind!r}")
+        for name in {n for names in _NEEDS.values() for n in names} - set(_NEEDS[self.kind]):
+            if getattr(self, name) is not None:
+                raise ValueError(f"{name} does not apply to kind {self.kind!r}")
         return self
 
 
@@ -76,10 +75,14 @@ class NoiseLevels(_Strict):
     amplifier's output; the levels count only in mode 'explicit')."""
 
     mode: Literal["profile", "off", "explicit"] = "explicit"
-    s: float = Field(default=0.0, ge=0)
-    theta: float = Field(default=0.0, ge=0)
-    s_dot: float = Field(default=0.0, ge=0)
-    amplifier: float = Field(default=0.0, ge=0)
+    s: float | None = Field(default=None, ge=0)
+    theta: float | None = Field(default=None, ge=0)
+    s_dot: float | None = Field(default=None, ge=0)
+    amplifier: float | None = Field(default=None, ge=0)
+
+    def level(self, name: str) -> float:
+        """An explicit level in V rms (one left out is zero)."""
+        return getattr(self, name, None) or 0.0
 
 
 class Scenario(_Strict):
@@ -104,7 +107,8 @@ class Scenario(_Strict):
         if isinstance(v, str) and v in ("profile", "off"):
             return {"mode": v}
         if not isinstance(v, (dict, NoiseLevels)):
-            raise ValueError("must be 'profile', 'off' or a table of V rms levels (s, theta, s_dot, amplifier)")
+            raise ValueError("must be 'profile', 'off' or a table of V rms levels "
+                             "(s, theta, s_dot, amplifier)")
         return v
 
     @field_validator("drift", mode="before")

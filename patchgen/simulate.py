@@ -22,6 +22,7 @@ import csv
 import io
 import json
 import math
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
@@ -31,8 +32,9 @@ import numpy as np
 
 from .bench import BenchProfile
 from .circuit import Circuit, compile_circuit
-from .engine import (ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, DEFAULT_DT_S, DIST_CART_FORCE, DIST_STEP,
-                     DIST_TIP_FORCE, HISTORY_CHANNELS, EngineConfig, noise_process, run_batch)
+from .engine import (ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, DIST_CART_FORCE, DIST_STEP,
+                     DIST_TIP_FORCE, HISTORY_CHANNELS, EngineConfig, default_step, draw_batch,
+                     noise_process, run_batch)
 from .errors import InputError
 from .machine import MachineProfile
 from .netlist import Netlist
@@ -40,6 +42,7 @@ from .plant import PlantParams
 from .scenario import Scenario
 
 PERCENTILES = (5, 50, 95)
+BATCH_NOISE_BYTES = 64 * 2**20  # noise drawn ahead per batch of runs (two batches live at once)
 
 IDEAL_MEANING = (
     "no sensor or amplifier noise, no integrator drift, no saturation (overloads still recorded), "
@@ -58,12 +61,12 @@ class Overload:
 
 @dataclass(frozen=True)
 class RunSummary:
-    """What one run did. Times are None when the event did not happen. A run ends at the
+    """What run ``run`` (random draws from numpy's default generator seeded [seed, run]) did.
+    Times are None when the event did not happen. A run ends at the
     scenario's end or at the limit-switch trip (the motor is off, the experiment over): the
     figures cover the run up to there."""
 
     run: int
-    seed: int
     held: bool  # neither fallen nor the limit switches tripped
     limit_switch_tripped: bool
     trip_time_s: float | None
@@ -129,7 +132,7 @@ class SimResult:
         """Everything but the histories, as plain JSON-able data."""
         return {
             "design": self.design,
-            "scenario": self.scenario.model_dump(mode="json"),
+            "scenario": self.scenario.model_dump(mode="json", exclude_none=True),
             "machine": self.machine,
             "bench": self.bench,
             "ideal": self.ideal,
@@ -148,9 +151,9 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
              progress: Callable[[int], None] | None = None) -> SimResult:
     """Simulate ``runs`` runs of the scenario (seed from the argument, else the scenario's).
 
-    Run i uses a seed derived from (seed, i), so run 0 of a Monte Carlo is the single run of the
-    same seed. ``keep_history`` keeps the first run's time histories. ``progress`` is called
-    with the number of runs done after each batch.
+    Run i draws from ``numpy.random.default_rng([seed, i])``, so run 0 of a Monte Carlo is the
+    single run of the same seed. ``keep_history`` keeps the first run's time histories.
+    ``progress`` is called with the number of runs done after each batch.
     """
     if runs < 1:
         raise InputError("--runs", "", f"must be at least 1 (got {runs})")
@@ -159,15 +162,29 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     if not 0 <= base_seed < 2**63:
         raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")
     cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal)
-    seeds = run_seeds(base_seed, runs)
 
-    chunk = max(4 * numba.get_num_threads(), math.ceil(runs / 50))
+    # batches of runs: enough for the threads, few progress calls, bounded noise memory
+    per_run = (cfg.n_steps + 1) * (circuit.n_sensors + circuit.n_amps) * 4
+    chunk = max(2 * numba.get_num_threads(),
+                min(math.ceil(runs / 20), BATCH_NOISE_BYTES // per_run))
+    starts = range(0, runs, chunk)
+
+    def draws(start: int):
+        return draw_batch(cfg, [np.random.default_rng([base_seed, i])
+                                for i in range(start, min(start + chunk, runs))])
+
     parts = []
-    for start in range(0, runs, chunk):
-        n_hist = 1 if keep_history and start == 0 else 0
-        parts.append(run_batch(cfg, seeds[start:start + chunk], n_hist))
-        if progress is not None:
-            progress(min(start + chunk, runs))
+    with ThreadPoolExecutor(max_workers=1) as pool:  # next batch's draws while this one runs
+        pending = None
+        batch = draws(starts[0])
+        for k, start in enumerate(starts):
+            if pending is not None:
+                batch = pending.result()
+            if k + 1 < len(starts):
+                pending = pool.submit(draws, starts[k + 1])
+            parts.append(run_batch(cfg, batch, 1 if keep_history and start == 0 else 0))
+            if progress is not None:
+                progress(min(start + chunk, runs))
 
     def cat(name: str) -> np.ndarray:
         return np.concatenate([getattr(p, name) for p in parts])
@@ -178,7 +195,7 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     max_uc, max_f, final = cat("max_abs_u_c"), cat("max_abs_force"), cat("final_state")
     summaries = [
         RunSummary(
-            run=i, seed=int(seeds[i]),
+            run=i,
             held=bool(np.isnan(trip[i]) and np.isnan(fall[i])),
             limit_switch_tripped=bool(not np.isnan(trip[i])), trip_time_s=_opt(trip[i]),
             fallen=bool(not np.isnan(fall[i])), fall_time_s=_opt(fall[i]),
@@ -204,18 +221,14 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     )
 
 
-def run_seeds(seed: int, runs: int) -> np.ndarray:
-    """The per-run generator seeds (32-bit) derived from one seed."""
-    return np.array([np.random.SeedSequence([seed, i]).generate_state(1, dtype=np.uint32)[0]
-                     for i in range(runs)], dtype=np.uint32)
-
-
 def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
                   machine: MachineProfile, scenario: Scenario, *,
-                  ideal: bool = False, dt: float | None = None) -> tuple[EngineConfig, SimSettings]:
+                  ideal: bool = False) -> tuple[EngineConfig, SimSettings]:
     """Resolve profiles, scenario and ``ideal`` into the engine's arrays (and a readable record)."""
-    src = f"scenario {scenario.name}"
-    step = dt or scenario.dt_s or DEFAULT_DT_S
+    fastest = [1.0 / v for v in circuit.time_rates() if v > 0]
+    if not ideal and bench.actuator.model != "gain":
+        fastest.append(bench.actuator.tau)
+    step = scenario.dt_s or default_step(fastest, ideal)
     n_steps = max(1, math.ceil(scenario.duration_s / step - 1e-9))
     step = scenario.duration_s / n_steps
     stride = max(1, round(scenario.record_dt_s / step))
@@ -226,12 +239,13 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         sensor_rms = {s: 0.0 for s in circuit.sensor_ids}
         amp_rms = 0.0
     elif scenario.noise.mode == "explicit":
-        sensor_rms = {s: float(getattr(scenario.noise, s, 0.0)) for s in circuit.sensor_ids}
-        amp_rms = scenario.noise.amplifier
+        sensor_rms = {s: scenario.noise.level(s) for s in circuit.sensor_ids}
+        amp_rms = scenario.noise.level("amplifier")
     else:
         sensor_rms = {s: float(sens.noise_V_rms.get(s, 0.0)) for s in circuit.sensor_ids}
         amp_rms = imp.amplifier_noise_V_rms
-    s_proc = [noise_process(sensor_rms[s], sens.noise_bandwidth_Hz, step) for s in circuit.sensor_ids]
+    s_proc = [noise_process(sensor_rms[s], sens.noise_bandwidth_Hz, step)
+              for s in circuit.sensor_ids]
     a_proc = noise_process(amp_rms, imp.noise_bandwidth_Hz, step)
 
     if ideal or scenario.drift == "off":
@@ -250,7 +264,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         tau, dead, flim = act.tau, act.dead_zone_V, act.force_limit_N
         if model != ACT_GAIN and tau <= 0:
             if model == ACT_LAG_ZERO:
-                raise InputError(f"bench {bench.id}", "actuator.tau", "model lag_zero needs tau > 0")
+                raise InputError(f"bench {bench.id}", "actuator.tau",
+                                 "model lag_zero needs tau > 0")
             model = ACT_GAIN
         act_text = (f"{act.model}: K_U = {act.K_U} N/V, tau = {tau} s, "
                     f"dead zone +/-{dead} V, force limit +/-{flim} N")
@@ -267,8 +282,6 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
             t0s.append(d.time_s)
             t1s.append(d.time_s + d.duration_s)
             vals.append(d.force_N)
-    if scenario.duration_s / step < 2 and kinds:
-        raise InputError(src, "duration_s", "too short for its disturbances")
 
     n_amp = circuit.n_amps
     cfg = EngineConfig(
@@ -277,7 +290,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         plant=np.array([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c, plant.d / 2]),
         limit_switches=bool(bench.track.limit_switches),
         sensor_state=circuit.sensor_state, sensor_gain=circuit.sensor_gain,
-        sensor_noise_a=np.array([p[0] for p in s_proc]), sensor_noise_std=np.array([p[1] for p in s_proc]),
+        sensor_noise_a=np.array([p[0] for p in s_proc]),
+        sensor_noise_std=np.array([p[1] for p in s_proc]),
         amp_kind=circuit.amp_kind, in_ptr=circuit.in_ptr, in_src=circuit.in_src,
         in_gain=circuit.in_gain, param1=circuit.param1, param2=circuit.param2, ic_V=circuit.ic_V,
         drift=np.where(circuit.drifting(), drift, 0.0),
@@ -369,11 +383,11 @@ def write_outputs(result: SimResult, out_dir: str | Path) -> list[Path]:
     path = out / "runs.csv"
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["run", "seed", "held", "limit_switch_tripped", "trip_time_s", "fallen",
+    w.writerow(["run", "held", "limit_switch_tripped", "trip_time_s", "fallen",
                 "fall_time_s", "max_abs_theta_deg", "max_abs_s_m", "rms_theta_deg",
                 "max_abs_u_c_V", "max_abs_force_N", "overloads"])
     for r in result.runs:
-        w.writerow([r.run, r.seed, int(r.held), int(r.limit_switch_tripped), _num(r.trip_time_s),
+        w.writerow([r.run, int(r.held), int(r.limit_switch_tripped), _num(r.trip_time_s),
                     int(r.fallen), _num(r.fall_time_s), _num(r.max_abs_theta_deg),
                     _num(r.max_abs_s_m), _num(r.rms_theta_deg), _num(r.max_abs_u_c_V),
                     _num(r.max_abs_force_N),

@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 
 from patchgen.bench import load_bench
-from patchgen.engine import DEFAULT_DT_S, noise_process, plant_rhs
+from patchgen.circuit import compile_circuit
+from patchgen.engine import default_step, noise_process, plant_rhs
 from patchgen.machine import load_machine
 from patchgen.netlist import read_netlist
 from patchgen.plant import PlantParams, nonlinear_rhs
 from patchgen.scenario import Scenario, load_scenario
-from patchgen.simulate import simulate
+from patchgen.simulate import engine_config, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 # thesis table B.1
@@ -58,8 +59,12 @@ def test_halving_the_default_step_moves_theta_less_than_1e_4_rad_rms(name, ideal
     net = read_netlist(ROOT / "tests/fixtures/ch5-netlist-example.json")
     bench, gp6 = load_bench("uw-1991"), load_machine("gp6")
     base = load_scenario(ROOT / "sims" / f"{name}.toml").model_dump()
+    _, settings = engine_config(compile_circuit(net, gp6), PLANT, bench, gp6,
+                                Scenario.model_validate(base), ideal=ideal)
+    step = settings.dt_s
+    assert step == (0.01 if ideal else 0.002)  # the defaults this test measures
     runs = []
-    for dt in (DEFAULT_DT_S, DEFAULT_DT_S / 2):
+    for dt in (step, step / 2):
         sc = Scenario.model_validate({**base, "noise": "off", "dt_s": dt, "record_dt_s": 0.01})
         h = simulate(net, PLANT, bench, gp6, sc, ideal=ideal).history
         runs.append((np.round(h["t"], 9), h["theta"]))
@@ -67,3 +72,9 @@ def test_halving_the_default_step_moves_theta_less_than_1e_4_rad_rms(name, ideal
     assert len(i) > 100
     rms = math.sqrt(np.mean((runs[0][1][i] - runs[1][1][j]) ** 2))
     assert rms < 1e-4
+
+
+def test_default_step_resolves_the_fastest_time_constant():
+    assert default_step([], ideal=False) == 0.002
+    assert default_step([], ideal=True) == 0.01
+    assert default_step([0.001, 0.2], ideal=True) == 0.001

@@ -199,20 +199,30 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
         if sensor_state[i] == S_INDEX:
             q -= s_ref
         sig[i] = sensor_gain[i] * q + nz_s[i]
-    for j in range(amp_kind.shape[0]):
+    na = amp_kind.shape[0]
+    # integrating amplifiers first: their outputs are states, whatever reads them comes later
+    for j in range(na):
+        kd = amp_kind[j]
+        if kd == INTEGRATOR or kd == LAG:
+            out = zt[j] + nz_a[j]
+            raw[j] = out
+            if clip:
+                if out > sat:
+                    out = sat
+                elif out < -sat:
+                    out = -sat
+            sig[ns + j] = out
+    # then summers and differentiators, in evaluation order
+    for j in range(na):
+        kd = amp_kind[j]
+        if kd == INTEGRATOR or kd == LAG:
+            continue
         acc = 0.0
         for k in range(in_ptr[j], in_ptr[j + 1]):
             acc += in_gain[k] * sig[in_src[k]]
-        kd = amp_kind[j]
         if kd == SUMMER:
             out = -acc
             dz_out[j] = 0.0
-        elif kd == INTEGRATOR:
-            out = zt[j]
-            dz_out[j] = -param1[j] * acc + drift[j]
-        elif kd == LAG:
-            out = zt[j]
-            dz_out[j] = param1[j] * (-acc - zt[j]) + drift[j]
         else:  # DIFFERENTIATOR with roll-off
             out = -param1[j] * (acc - zt[j])
             dz_out[j] = param2[j] * (acc - zt[j])
@@ -224,6 +234,17 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
             elif out < -sat:
                 out = -sat
         sig[ns + j] = out
+    # last, the integrating amplifiers' inputs, now that every signal of this instant is known
+    for j in range(na):
+        kd = amp_kind[j]
+        if kd == INTEGRATOR or kd == LAG:
+            acc = 0.0
+            for k in range(in_ptr[j], in_ptr[j + 1]):
+                acc += in_gain[k] * sig[in_src[k]]
+            if kd == INTEGRATOR:
+                dz_out[j] = -param1[j] * acc + drift[j]
+            else:
+                dz_out[j] = param1[j] * (-acc - zt[j]) + drift[j]
     return 0
 
 

@@ -38,6 +38,8 @@ def _register() -> None:
     from . import design as _design  # noqa: F401
     from . import patch as _patch  # noqa: F401
     from . import recommend as _recommend  # noqa: F401
+    from . import simulate as _simulate  # noqa: F401
+    from . import spice as _spice  # noqa: F401
     from . import sweep as _sweep  # noqa: F401
 
 

@@ -1,0 +1,118 @@
+"""`patchgen simulate SPEC --scenario X -o DIR`: the patched circuit on the bench."""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from pathlib import Path
+
+import click
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from ..bench import load_bench
+from ..diagnosis import diagnose
+from ..model import plant_params
+from ..outputs import write_files
+from ..patch import build_patch
+from ..scenario import load_scenario
+from ..simulate import SimResult, simulate, write_outputs
+from . import cli
+from .design import design_from_path
+
+
+def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal, keep_history=True,
+                      quiet=False) -> SimResult:
+    """simulate() with a progress bar when there is more than one run."""
+    if runs <= 1 or quiet:
+        return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
+                        keep_history=keep_history)
+    cols = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
+            TimeElapsedColumn())
+    with Progress(*cols, console=Console(stderr=True), transient=True) as prog:
+        task = prog.add_task(f"{scenario.name}: Monte Carlo", total=runs)
+        return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
+                        keep_history=keep_history, progress=lambda done: prog.update(task, completed=done))
+
+
+def rendered_outputs(result: SimResult) -> dict[str, bytes]:
+    """The simulator's files, rendered in a scratch directory and read back (for all-or-nothing writes)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = write_outputs(result, tmp)
+        return {p.name: p.read_bytes() for p in paths}
+
+
+def summary_table(result: SimResult) -> Table:
+    d = result.distribution
+    r0 = result.runs[0]
+    t = Table(title=f"{result.design} on the {result.bench} bench, scenario {result.scenario.name}"
+              + (" (ideal)" if result.ideal else ""), title_justify="left")
+    t.add_column("figure")
+    t.add_column("run 0 (seed %d)" % result.seed, justify="right")
+    if d.runs > 1:
+        t.add_column(f"{d.runs} runs", justify="right")
+
+    def when(flag, time):
+        return f"yes, at {time:.2f} s" if flag else "no"
+
+    rows = [
+        ("held (up, inside the switches)", "yes" if r0.held else "no", f"{100 * d.fraction_held:.1f} %"),
+        ("limit switch tripped", when(r0.limit_switch_tripped, r0.trip_time_s), f"{100 * d.fraction_tripped:.1f} %"),
+        ("  when (s)", "", _p(d, "trip_time_s")),
+        ("pendulum fallen past 30 deg", when(r0.fallen, r0.fall_time_s), f"{100 * d.fraction_fallen:.1f} %"),
+        ("  when (s)", "", _p(d, "fall_time_s")),
+        ("max |theta| (deg)", f"{r0.max_abs_theta_deg:.2f}", _p(d, "max_abs_theta_deg")),
+        ("max |s| (m)", f"{r0.max_abs_s_m:.3f}", _p(d, "max_abs_s_m")),
+        ("RMS theta (deg)", f"{r0.rms_theta_deg:.3f}", _p(d, "rms_theta_deg")),
+        ("max |u_c| (V)", f"{r0.max_abs_u_c_V:.2f}", _p(d, "max_abs_u_c_V")),
+        ("overloads (amplifier at time)", ", ".join(f"{o.amplifier} at {o.first_time_s:.2f} s" for o in r0.overloads)
+         or "none", f"{100 * d.fraction_overloaded:.1f} %"),
+    ]
+    for row in rows:
+        t.add_row(*(row if d.runs > 1 else row[:2]))
+    return t
+
+
+def _p(d, key: str) -> str:
+    p = d.percentiles.get(key)
+    if not p or p.get("p50") is None:
+        return "-"
+    return f"{p['p50']:.3g} (5-95%: {p['p5']:.3g}-{p['p95']:.3g})"
+
+
+@cli.command("simulate")
+@click.argument("spec", type=click.Path(dir_okay=False))
+@click.option("--scenario", "scenario_path", required=True, type=click.Path(dir_okay=False),
+              help="Scenario TOML (see sims/).")
+@click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for history.csv, runs.csv, summary.json and the plots.")
+@click.option("--seed", type=int, default=None, help="Noise seed (default: the scenario's).")
+@click.option("--runs", type=click.IntRange(1, 1_000_000), default=1, show_default=True,
+              help="Monte Carlo runs over noise seeds.")
+@click.option("--ideal", is_flag=True, help="Every imperfection off (noise, drift, saturation, actuator lag "
+              "and dead zone): the patch as the design imagines it.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--force", is_flag=True, help="Replace output files that already exist.")
+def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, as_json, force) -> None:
+    """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
+    d, machine = design_from_path(spec)
+    scenario = load_scenario(scenario_path)
+    bench = load_bench(d.spec.bench, d.spec.path)
+    net = build_patch(d, machine)
+    result = run_with_progress(net, plant_params(d.spec), bench, machine, scenario, seed=seed, runs=runs,
+                               ideal=ideal, quiet=as_json)
+    files = rendered_outputs(result)
+    files["netlist.json"] = net.to_json().encode()
+    written = write_files(out_dir, files, force=force)
+    if as_json:
+        click.echo(json.dumps(result.summary(), indent=2, sort_keys=True))
+        return
+    console = Console()
+    console.print(summary_table(result))
+    for lp in diagnose(net, plant_params(d.spec), bench):
+        console.print(("[green]" if lp.stable else "[red]") + lp.line() + ("[/green]" if lp.stable else "[/red]"))
+    if bench.actuator.dead_zone_V and not ideal:
+        console.print(f"the bench's dead zone (+/-{bench.actuator.dead_zone_V:g} V) and force limit "
+                      f"({bench.actuator.force_limit_N:g} N) are in the simulation, not in these poles")
+    console.print("wrote " + ", ".join(str(Path(p)) for p in written))

@@ -1,0 +1,112 @@
+"""`patchgen spice SPEC --scenario X -o DIR`: the patch checked at the electrical level by ngspice."""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import click
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from ..bench import load_bench
+from ..model import plant_params
+from ..outputs import write_files
+from ..patch import build_patch
+from ..scenario import load_scenario
+from ..simulate import simulate
+from ..spice import NgspiceError, NgspiceMissing, SpiceSettings, compare, plot_comparison, run_ngspice, spice_deck
+from . import cli
+from .design import design_from_path
+
+NO_NGSPICE_STATUS = NgspiceMissing.exit_status
+
+
+class _Own:
+    """patchgen's own run as a trajectory (t and named signals, SI and volts)."""
+
+    def __init__(self, history: dict[str, np.ndarray]):
+        self.t = history["t"]
+        self.signals = {k: v for k, v in history.items() if k != "t"}
+
+
+@cli.command("spice")
+@click.argument("spec", type=click.Path(dir_okay=False))
+@click.option("--scenario", "scenario_path", required=True, type=click.Path(dir_okay=False),
+              help="Scenario TOML (see sims/).")
+@click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for the deck, ngspice's data, the comparison and its overlay plot.")
+@click.option("--ideal", is_flag=True, help="Noise and drift off and the actuator a pure gain, as patchgen "
+              "simulate --ideal; the op-amp macromodels (finite gain, output limits) stay.")
+@click.option("--step", "step_s", type=click.FloatRange(min=1e-5, max=0.1), default=0.005, show_default=True,
+              help="Output step of the transient (s).")
+@click.option("--tolerance", type=click.FloatRange(min=0), default=0.01, show_default=True,
+              help="Agreement required, as a fraction of each signal's peak.")
+@click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
+@click.option("--force", is_flag=True, help="Replace output files that already exist.")
+def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, as_json, force) -> None:
+    """Export SPEC's patch and the bench as an ngspice deck, run it, and compare with patchgen's own
+    simulation of the same scenario. Exit 0 when they agree within --tolerance, 1 when not,
+    3 without ngspice (the deck is still written)."""
+    d, machine = design_from_path(spec)
+    scenario = load_scenario(scenario_path)
+    bench = load_bench(d.spec.bench, d.spec.path)
+    net = build_patch(d, machine)
+    plant = plant_params(d.spec)
+    noise_on = (not ideal) and scenario.noise.mode != "off"
+    drift_on = (not ideal) and scenario.drift != "off" and scenario.drift != 0
+    settings = SpiceSettings(duration_s=scenario.duration_s, step_s=step_s, x0=tuple(scenario.initial.vector()),
+                             noise=noise_on, drift=drift_on, actuator="ideal" if ideal else "bench",
+                             seed=scenario.seed)
+    deck = spice_deck(net, plant, bench, machine, settings)
+    files: dict[str, str | bytes] = {"patch.cir": deck.text}
+    for name, data in deck.files.items():
+        files[name] = data
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            sp = run_ngspice(deck, tmp)
+            data = Path(tmp, "patch.data")
+            if data.exists():
+                files["patch.data"] = data.read_bytes()
+    except NgspiceMissing as exc:
+        write_files(out_dir, files, force=force)
+        click.echo(f"patchgen: {exc} (deck written to {Path(out_dir) / 'patch.cir'})", err=True)
+        sys.exit(NO_NGSPICE_STATUS)
+    except NgspiceError as exc:
+        write_files(out_dir, files, force=force)
+        click.echo(f"patchgen: ngspice failed: {exc}", err=True)
+        sys.exit(NgspiceError.exit_status)
+    own = simulate(net, plant, bench, machine, scenario, ideal=ideal)
+    cmp = compare(sp, _Own(own.history))
+    with tempfile.TemporaryDirectory() as tmp:
+        plots = plot_comparison(cmp, Path(tmp) / "overlay", title=f"{d.spec.name}: ngspice vs patchgen "
+                                f"({scenario.name}{', ideal' if ideal else ''})")
+        for p in plots:
+            files[p.name] = p.read_bytes()
+    report = {"design": d.spec.name, "scenario": scenario.name, "ideal": ideal, "tolerance": tolerance,
+              "ngspice_run_time_s": sp.run_time_s,
+              "signals": {k: {"rms_rel": v.rms_rel, "max_rel": v.max_rel, "peak": v.peak}
+                          for k, v in cmp.signals.items()},
+              "agrees": cmp.agrees(tolerance)}
+    files["comparison.json"] = json.dumps(report, indent=2, sort_keys=True) + "\n"
+    written = write_files(out_dir, files, force=force)
+    if as_json:
+        click.echo(json.dumps(report, indent=2, sort_keys=True))
+    else:
+        t = Table(title=f"ngspice against patchgen: {d.spec.name}, {scenario.name}"
+                  + (" (ideal: noise, drift off; ideal actuator; op-amp macromodels)" if ideal else ""),
+                  title_justify="left")
+        for c in ("signal", "peak", "RMS difference", "largest difference"):
+            t.add_column(c, justify="right" if c != "signal" else "left")
+        for k, v in cmp.signals.items():
+            t.add_row(k, f"{v.peak:.4g}", f"{100 * v.rms_rel:.3f} % of peak", f"{100 * v.max_rel:.3f} % of peak")
+        console = Console()
+        console.print(t)
+        console.print(("[green]agree[/green]" if report["agrees"] else "[red]disagree[/red]")
+                      + f" within {100 * tolerance:g} % of peak; ngspice ran {sp.run_time_s:.2f} s")
+        console.print("wrote " + ", ".join(str(p) for p in written))
+    if not report["agrees"]:
+        sys.exit(1)

@@ -21,7 +21,29 @@ from ..recommend import prepare, evaluate, Recommendation, table_markdown, table
 from ..scenario import load_scenario
 from ..spec import load_spec
 from . import cli
+from ..sheet import SheetSection
 from .patch import patch_files
+
+
+def why_section(rec: Recommendation, machine) -> SheetSection:
+    """The comparison table for the sheet: why the chosen realisation."""
+    header = ["rank", "realisation", "held", "fallen", "tripped", "overloaded", "GM lower/upper (dB)", "PM (deg)",
+              "worst swing (V)", "amps/pots"]
+    rows = []
+    for r in table_rows(rec):
+        if r["error"]:
+            rows.append(["-", r["realisation"], "does not fit: " + r["error"], "", "", "", "", "", "", ""])
+            continue
+        rows.append([str(r["rank"]), f"{r['realisation']} ({r['estimator']})", f"{r['fraction_ok']:.1%}",
+                     f"{r['fraction_fallen']:.1%}", f"{r['fraction_tripped']:.1%}", f"{r['fraction_overloaded']:.1%}",
+                     f"{_fmt(r['lower_gm_db'], '{:+.1f}', 'none')} / {_fmt(r['upper_gm_db'], '{:+.1f}', 'inf')}",
+                     _fmt(r["pm_deg"], "{:.1f}"), f"{r['worst_swing_V']:.2f} of {machine.reference_V:g}",
+                     f"{r['amplifiers']}/{r['pots']}"])
+    note = (f"Each realisation that fits was designed, allocated and simulated on the bench ({rec.scenario.name}, "
+            f"{rec.runs} noise seeds from seed {rec.seed}, bench actuator, noise and drift). Ranked by the "
+            "fraction of runs held (pendulum up, cart inside the switches, no overload), then gain margin, "
+            "phase margin and worst amplifier swing.")
+    return SheetSection("Why this patch", header, rows, note)
 
 DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "sims" / "hold-120s.toml"
 
@@ -71,7 +93,7 @@ def recommend_cmd(spec, out_dir, runs, scenario_path, seed, as_json, force):
         raise InputError(sp.path, "estimator", "no realisation fits the machine: "
                          + "; ".join(f"{c.label}: {c.error}" for c in rec.ranked))
     md = table_markdown(rec, machine.reference_V)
-    files = patch_files(best.design, machine, best.netlist, extra_sections=[("Why this patch", md)])
+    files = patch_files(best.design, machine, best.netlist, extra_sections=[why_section(rec, machine)])
     files["recommendation.md"] = f"# Why this patch\n\n{md}"
     rows = table_rows(rec)
     files["recommendation.json"] = json.dumps({"spec": sp.name, "scenario": scenario.name, "runs": runs,

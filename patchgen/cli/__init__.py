@@ -41,6 +41,7 @@ def _register() -> None:
     from . import simulate as _simulate  # noqa: F401
     from . import spice as _spice  # noqa: F401
     from . import sweep as _sweep  # noqa: F401
+    from . import swingup as _swingup  # noqa: F401
 
 
 _register()

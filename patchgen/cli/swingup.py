@@ -1,0 +1,90 @@
+"""`patchgen swingup SPEC -o DIR`: pump up from hanging, hand off to the patched controller, hold."""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from pathlib import Path
+
+import click
+from rich.console import Console
+from rich.table import Table
+
+from ..bench import load_bench
+from ..manoeuvre import manoeuvre, plot_manoeuvre
+from ..model import plant_params
+from ..outputs import write_files
+from ..patch import build_patch
+from ..sheet import SheetSection
+from ..swingup import STRATEGIES
+from ..swingup_output import patch_sheet_rows, write_outputs
+from . import cli
+from .design import design_from_path
+from .patch import patch_files
+
+
+@cli.command("swingup")
+@click.argument("spec", type=click.Path(dir_okay=False))
+@click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for the manoeuvre's histories, switching table, plots and the patch with the schedule.")
+@click.option("--strategy", type=click.Choice(STRATEGIES), default="supervisory", show_default=True,
+              help="supervisory: section 3.3's three-phase logic on measured states; schedule: optimised "
+              "open-loop switching times; energy: Astrom-Furuta energy control.")
+@click.option("--force-limit", type=click.FloatRange(min=0.1), default=None,
+              help="Largest force (N) for the pump-up (default: the bench actuator's limit).")
+@click.option("--hold", "hold_s", type=click.FloatRange(min=0.1), default=30.0, show_default=True,
+              help="Seconds the patched controller must hold after the hand-off.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Noise seed of the hold.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--force", is_flag=True, help="Replace output files that already exist.")
+def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, as_json, force) -> None:
+    """Pump SPEC's pendulum up from hanging at rest, hand it to the patched controller when the state
+    enters the zone of the linear design, and hold it on the bench (actuator lag and dead zone,
+    noise, drift)."""
+    d, machine = design_from_path(spec)
+    net = build_patch(d, machine)
+    bench = load_bench(d.spec.bench, d.spec.path)
+    plant = plant_params(d.spec)
+    F = force_limit or bench.actuator.force_limit_N
+    m = manoeuvre(net, plant, bench, machine, d.K[:, :4], strategy, F, hold_s, seed)
+    p = m.pump
+    summary = {"design": d.spec.name, "strategy": strategy, "force_limit_N": F,
+               "reached_zone": p.reached, "handoff_time_s": p.handoff_time,
+               "max_abs_s_pump_m": p.max_abs_s_pump, "track_half_m": plant.d / 2,
+               "hold_s": hold_s, "held": m.held,
+               "hold": None if m.hold is None else {k: v for k, v in m.hold.summary()["first_run"].items()
+                                                    if k != "final_state"}}
+    rows = patch_sheet_rows(p)
+    section = SheetSection(f"Pump-up schedule ({strategy}, {F:g} N)", rows[0], rows[1:],
+                           "Switch times for the operator or a sequencer, from hanging at rest; hand off (IC -> OP) "
+                           "when the pendulum is in the zone. Computed for this design's plant model: an open-loop "
+                           "schedule is fragile, the supervisory logic re-times itself on the measured states.")
+    files = patch_files(d, machine, net, extra_sections=[section], runs_hold=10)
+    with tempfile.TemporaryDirectory() as tmp:
+        for path in write_outputs(p, tmp):
+            files[path.name] = path.read_bytes()
+        for path in plot_manoeuvre(m, Path(tmp) / "manoeuvre", f"{d.spec.name}: {strategy} pump-up, "
+                                   f"hand-off at {p.handoff_time or float('nan'):.2f} s, patched hold"):
+            files[path.name] = path.read_bytes()
+    files["manoeuvre.json"] = json.dumps(summary, indent=2, sort_keys=True) + "\n"
+    written = write_files(out_dir, files, force=force)
+    if as_json:
+        click.echo(files["manoeuvre.json"], nl=False)
+        return
+    console = Console()
+    t = Table(title=f"Switching table: {strategy}, {F:g} N", title_justify="left")
+    for c in rows[0]:
+        t.add_column(c)
+    for r in rows[1:]:
+        t.add_row(*r)
+    console.print(t)
+    if p.reached:
+        console.print(f"hand-off zone reached at {p.handoff_time:.2f} s, max |s| during pump-up "
+                      f"{p.max_abs_s_pump:.3f} m (switches at +/-{plant.d / 2:.3f} m)")
+        h = m.hold.runs[0]
+        console.print(("[green]" if m.held else "[red]") + f"patched controller on the bench for {hold_s:g} s: "
+                      + ("held" if m.held else "lost it") + f" (max |theta| {h.max_abs_theta_deg:.2f} deg, "
+                      f"max |s| {h.max_abs_s_m:.3f} m)" + ("[/green]" if m.held else "[/red]"))
+    else:
+        console.print("[red]the hand-off zone was not reached[/red]")
+    console.print("wrote " + ", ".join(str(x) for x in written))

@@ -134,6 +134,7 @@ def _search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachinePr
 def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>") -> Netlist:
     """Place the realization on the machine; a shortfall raises ResourceError (one line)."""
     blocks, kept, notes, too_big = _plan_terms(real, machine, source)
+    _check_lower_bound(blocks, kept, machine, source)
     P, inverted, pre = _search(blocks, kept, machine)
     stages: list[_Stage] = []
     wanted: dict[tuple[str, str, float], float] = {}
@@ -160,6 +161,21 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
     if too_big:
         raise ResourceError(source, "machine", too_big[0] + f" ({len(too_big)} such coefficients)")
     return _emit(real, machine, stages, P, notes, wanted)
+
+
+def _check_lower_bound(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile,
+                       source: str) -> None:
+    """Fail fast, before the polarity search, when even one amplifier per block is too many."""
+    need_amp = len(blocks)
+    need_int = sum(1 for b in blocks if SLOT_ROLE[ROLE[b.kind]] == "integrator")
+    need_pot = sum(1 for b in blocks for t in kept[b.name] if _needs_pot(abs(t.coeff)))
+    have_int = sum(1 for a in machine.amplifiers if "integrator" in a.roles)
+    have_amp = len(machine.amplifiers)
+    if need_int > have_int or need_amp > have_amp or need_pot > machine.pot_count:
+        raise ResourceError(source, "machine",
+                            f"the patch needs at least {need_amp} amplifiers ({need_int} integrators) and {need_pot} "
+                            f"pots; the {machine.name} has {have_amp} amplifiers ({have_int} integrators) and "
+                            f"{machine.pot_count} pots")
 
 
 def _check_resources(stages: list[_Stage], machine: MachineProfile, real: Realization, source: str) -> None:

@@ -45,6 +45,13 @@ class Margins:
 
 
 def _freqresp(A, B, C, w: np.ndarray) -> np.ndarray:
+    """C (jw I - A)^-1 B: in modal form when A is well diagonalisable (O(n) per frequency),
+    else by a linear solve per frequency."""
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) < 1e8:
+        c = (C @ V)[0]
+        b = np.linalg.solve(V, B)[:, 0]
+        return (c * b) @ (1.0 / (1j * w[None, :] - lam[:, None]))
     n = A.shape[0]
     M = 1j * w[:, None, None] * np.eye(n)[None] - A[None]
     x = np.linalg.solve(M, np.broadcast_to(B, (len(w), n, 1)))
@@ -71,7 +78,14 @@ def loop_margins(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> Margins:
     """Margins of the SISO loop (A, B, C) closed with unity negative feedback."""
     A, B, C = np.asarray(A, float), np.asarray(B, float).reshape(-1, 1), np.asarray(C, float).reshape(1, -1)
     stable = _stable(A, B, C, 1.0)
-    T = lambda w: _freqresp(A, B, C, w)  # noqa: E731
+    lam, V = np.linalg.eig(A)
+    modal = np.linalg.cond(V) < 1e8
+    if modal:
+        cm, bm = (C @ V)[0], np.linalg.solve(V, B)[:, 0]
+        cb = cm * bm
+        T = lambda w: cb @ (1.0 / (1j * np.atleast_1d(w)[None, :] - lam[:, None]))  # noqa: E731
+    else:
+        T = lambda w: _freqresp(A, B, C, np.atleast_1d(w))  # noqa: E731
     w = _W_GRID
     # phase crossovers: Im T = 0 with Re T < 0; also w -> 0
     phase_x = [x for x in _roots(lambda v: T(v).imag, w) if T(np.array([x]))[0].real < 0]

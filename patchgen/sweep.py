@@ -65,8 +65,21 @@ def cases(names: list[str], by: float, both_signs: bool = True) -> list[tuple[st
     return out
 
 
+def _outcome(net, plant, spec, machine, scenario_path, runs) -> dict:
+    """The nominal patch (as wired) on this plant, with the bench actuator, noise and drift."""
+    from .bench import load_bench
+    from .scenario import load_scenario
+    from .simulate import simulate
+
+    sc = load_scenario(scenario_path)
+    r = simulate(net, plant, load_bench(spec.bench, spec.path), machine, sc, runs=runs, keep_history=False)
+    return {"scenario": sc.name, "runs": runs, "fraction_held": r.distribution.fraction_held,
+            "max_abs_theta_deg": max(x.max_abs_theta_deg for x in r.runs),
+            "max_abs_s_m": max(x.max_abs_s_m for x in r.runs)}
+
+
 def _row(args) -> SweepRow:
-    spec, machine, label, factors, rolloff, nominal_pots = args
+    spec, machine, label, factors, rolloff, nominal_pots, nominal_net, scenario_path, runs = args
     plant = plant_params(spec).scaled(**factors)
     d = design(spec, plant=plant, default_rolloff_s=rolloff)
     changes: dict[str, tuple[float, float]] = {}
@@ -78,18 +91,25 @@ def _row(args) -> SweepRow:
                 changes[p.id] = (nominal_pots[p.id], p.setting)
     except InputError as exc:
         err = exc.message
-    return SweepRow(label, factors, [float(k) for k in d.K[0]], d.lqr_margins, d.lqg_margins, changes, err)
+    outcome = None
+    if nominal_net is not None and scenario_path is not None:
+        outcome = _outcome(nominal_net, plant, spec, machine, scenario_path, runs)
+    return SweepRow(label, factors, [float(k) for k in d.K[0]], d.lqr_margins, d.lqg_margins, changes, err,
+                    outcome)
 
 
-def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float, workers: int = 0) -> list[SweepRow]:
-    """Design for each perturbed plant, rows spread over the machine's cores (workers=0: all)."""
+def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float, workers: int = 0,
+          scenario_path=None, runs: int = 1) -> list[SweepRow]:
+    """Design for each perturbed plant, rows spread over the machine's cores (workers=0: all).
+    With a scenario, each row also predicts how the nominal patch (as wired) does on that plant."""
     rolloff = machine.imperfections.differentiator_rolloff_s
     nominal = design(spec, default_rolloff_s=rolloff)
     try:
-        nominal_pots = {p.id: p.setting for p in build_patch(nominal, machine).pots}
+        net = build_patch(nominal, machine)
+        nominal_pots = {p.id: p.setting for p in net.pots}
     except InputError:
-        nominal_pots = {}
-    jobs = [(spec, machine, label, f, rolloff, nominal_pots) for label, f in cases(names, by)]
+        net, nominal_pots = None, {}
+    jobs = [(spec, machine, label, f, rolloff, nominal_pots, net, scenario_path, runs) for label, f in cases(names, by)]
     if workers == 1 or len(jobs) < 4:
         return [_row(j) for j in jobs]
     with ProcessPoolExecutor(max_workers=workers or None) as ex:

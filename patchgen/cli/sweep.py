@@ -3,14 +3,19 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import click
 from rich.console import Console
 from rich.table import Table
 
+from ..scenario import load_scenario
 from ..sweep import parse_by, parse_vary, sweep
 from . import cli
 from .design import design_from_path
+
+
+DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "sims" / "offset-10deg.toml"
 
 
 def _db(x):
@@ -22,12 +27,18 @@ def _db(x):
 @click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters to vary, comma-separated.")
 @click.option("--by", "by_text", default="10%", show_default=True, help="Relative change, e.g. 10%.")
 @click.option("--workers", default=0, type=click.IntRange(0, 64), help="Processes (0: one per core).")
+@click.option("--scenario", "scenario_path", default=str(DEFAULT_SCENARIO), show_default="sims/offset-10deg.toml",
+              type=click.Path(dir_okay=False), help="Scenario for the predicted outcome of the nominal patch.")
+@click.option("--runs", type=click.IntRange(1, 10000), default=1, show_default=True,
+              help="Noise seeds per row for the predicted outcome.")
 @click.option("--json", "as_json", is_flag=True, help="Print the rows as JSON.")
-def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, as_json: bool) -> None:
-    """Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2)."""
+def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: str, runs: int, as_json: bool) -> None:
+    """Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2): the gains, the
+    margins, the pots that would change, and how the nominal patch (as wired) does on that plant."""
     names, by = parse_vary(vary), parse_by(by_text)
     d, machine = design_from_path(spec)
-    rows = sweep(d.spec, machine, names, by, workers)
+    load_scenario(scenario_path)  # a bad scenario fails here, in one line
+    rows = sweep(d.spec, machine, names, by, workers, scenario_path, runs)
     states = list(d.states)
     if as_json:
         click.echo(json.dumps([{
@@ -48,6 +59,7 @@ def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, as_json: bool) -
     if d.estimator is not None:
         t.add_column("loop GM/PM", justify="right")
     t.add_column("pots changed")
+    t.add_column("nominal patch on this plant")
     for r in rows:
         cells = [r.label] + [f"{k:.4f}" for k in r.K]
         cells.append(f"{_db(r.lqr_margins.lower_gm_db)} dB / {r.lqr_margins.pm_deg:.1f}°")
@@ -59,5 +71,7 @@ def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, as_json: bool) -
             cells.append("does not patch")
         else:
             cells.append(", ".join(f"{p} {a:.3f}→{b:.3f}" for p, (a, b) in sorted(r.pot_changes.items())) or "none")
+        o = r.outcome
+        cells.append("-" if o is None else f"held {100 * o['fraction_held']:.0f} %, max |θ| {o['max_abs_theta_deg']:.1f}°")
         t.add_row(*cells)
     Console(width=max(160, Console().width)).print(t)

@@ -7,8 +7,9 @@ or by one pre-summer per consuming block that collects all its mismatched terms.
 of polarities and inverters that needs the fewest amplifiers wins (ties: fewer inverters,
 then the first in a fixed order), so the result is deterministic.
 
-Coefficient magnitudes: |c| <= 1 on an x1 input through a pot set to |c|; 1 < |c| <= 10 on an
-x10 input through a pot set to |c|/10; exactly 1 or 10 without a pot; above 10 is an error.
+Coefficient magnitudes go on the smallest input weight w (the profile's, e.g. x1 and x10) with
+|c| <= w * pot_max, through a pot set to |c|/w; a coefficient equal to a weight needs no pot; one
+above the largest weight is an error.
 """
 
 from __future__ import annotations
@@ -55,9 +56,10 @@ def _plan_terms(real: Realization, machine: MachineProfile, source: str):
             mag = abs(t.coeff)
             if mag == 0:
                 continue
-            if mag > 10 * machine.pot_max + 1e-12:
-                too_big.append(f"coefficient {t.coeff:.4g} of {t.signal} into {b.name} exceeds 10, the most one "
-                               "x10 input gives")
+            top = max(machine.input_weights)
+            if mag > top * machine.pot_max + 1e-12:
+                too_big.append(f"coefficient {t.coeff:.4g} of {t.signal} into {b.name} exceeds {top:g}, the most "
+                               f"one x{top} input gives")
             if mag < res / 2 or (mag < res and real.below_resolution != "round"):
                 if real.below_resolution == "minimum":
                     notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the dial "
@@ -90,14 +92,17 @@ def _jacks_fit(blocks: list[Block], kept: dict[str, list[Term]], P: dict[str, in
     """Whether every stage's x1 and x10 inputs fit the roomiest amplifier of the machine."""
     if machine is None:
         return True
-    cap = {w: max(a.input_count(w) for a in machine.amplifiers) for w in (1, 10)}
+    ws = machine.input_weights
+    cap = {w: max(a.input_count(w) for a in machine.amplifiers) for w in ws}
     for b in blocks:
-        main = {1: 1 if b.name in pre else 0, 10: 0}
-        staged = {1: 0, 10: 0}
+        main = {w: 0 for w in ws}
+        staged = {w: 0 for w in ws}
+        if b.name in pre:
+            main[min(ws)] += 1
         for t in kept[b.name]:
-            w = 1 if abs(t.coeff) <= machine.pot_max + 1e-12 else 10
+            w = weight_for(abs(t.coeff), machine)
             (staged if t.signal in pre.get(b.name, ()) else main)[w] += 1
-        if any(main[w] > cap[w] or staged[w] > cap[w] for w in (1, 10)):
+        if any(main[w] > cap[w] or staged[w] > cap[w] for w in ws):
             return False
     return True
 
@@ -168,7 +173,7 @@ def _check_lower_bound(blocks: list[Block], kept: dict[str, list[Term]], machine
     """Fail fast, before the polarity search, when even one amplifier per block is too many."""
     need_amp = len(blocks)
     need_int = sum(1 for b in blocks if SLOT_ROLE[ROLE[b.kind]] == "integrator")
-    need_pot = sum(1 for b in blocks for t in kept[b.name] if _needs_pot(abs(t.coeff)))
+    need_pot = sum(1 for b in blocks for t in kept[b.name] if _needs_pot(abs(t.coeff), machine))
     have_int = sum(1 for a in machine.amplifiers if "integrator" in a.roles)
     have_amp = len(machine.amplifiers)
     if need_int > have_int or need_amp > have_amp or need_pot > machine.pot_count:
@@ -181,7 +186,7 @@ def _check_lower_bound(blocks: list[Block], kept: dict[str, list[Term]], machine
 def _check_resources(stages: list[_Stage], machine: MachineProfile, real: Realization, source: str) -> None:
     need_int = sum(1 for s in stages if SLOT_ROLE[s.role] == "integrator")
     need_amp = len(stages)
-    need_pot = sum(1 for s in stages for (_, _, c) in s.terms if c is not None and _needs_pot(abs(c)))
+    need_pot = sum(1 for s in stages for (_, _, c) in s.terms if c is not None and _needs_pot(abs(c), machine))
     have_int = sum(1 for a in machine.amplifiers if "integrator" in a.roles)
     have_amp = len(machine.amplifiers)
     short = need_int > have_int or need_amp > have_amp or need_pot > machine.pot_count
@@ -192,8 +197,14 @@ def _check_resources(stages: list[_Stage], machine: MachineProfile, real: Realiz
                             f"{machine.pot_count} pots")
 
 
-def _needs_pot(mag: float) -> bool:
-    return not (math.isclose(mag, 1.0, rel_tol=1e-12) or math.isclose(mag, 10.0, rel_tol=1e-12))
+def weight_for(mag: float, machine: MachineProfile) -> int:
+    """The smallest input weight that reaches |c| through a pot (the largest if none does)."""
+    ws = sorted(machine.input_weights)
+    return next((w for w in ws if mag <= w * machine.pot_max + 1e-12), ws[-1])
+
+
+def _needs_pot(mag: float, machine: MachineProfile) -> bool:
+    return not any(math.isclose(mag, w, rel_tol=1e-12) for w in machine.input_weights)
 
 
 def _assign_slots(stages: list[_Stage], machine: MachineProfile) -> dict[str, str]:
@@ -233,14 +244,14 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
     # amplifiers listed in slot order for a stable netlist
     for st in sorted(stages, key=lambda s: [a.id for a in machine.amplifiers].index(slot[s.key])):
         inputs: list[AmpInput] = []
-        used = {1: 0, 10: 0}
+        used = {w: 0 for w in machine.input_weights}
         for (sk, have, c) in st.terms:
             if c is None:  # pre-summer into its block
-                w, setting = 1, None
+                w, setting = min(machine.input_weights), None
             else:
                 mag = abs(c)
-                w = 1 if mag <= machine.pot_max + 1e-12 else 10
-                setting = None if not _needs_pot(mag) else mag / w
+                w = weight_for(mag, machine)
+                setting = None if not _needs_pot(mag, machine) else mag / w
             jack = f"x{w}{'abcdefgh'[used[w]]}"
             used[w] += 1
             slot_def = next(a for a in machine.amplifiers if a.id == slot[st.key])

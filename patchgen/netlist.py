@@ -54,7 +54,7 @@ class SensorInput(_Doc):
 class AmpInput(_Doc):
     source: str = Field(description="sensor id or amplifier id whose output feeds this input")
     pot: str | None = Field(default=None, description="pot id between source and input, or none")
-    weight: Literal[1, 10]
+    weight: int = Field(gt=0, description="input weight (the profile's, e.g. 1 or 10)")
     jack: str = Field(description="which input jack of the amplifier, e.g. x1a, x10b")
 
 
@@ -76,7 +76,7 @@ class Pot(_Doc):
     source: str
     amplifier: str
     jack: str
-    weight: Literal[1, 10]
+    weight: int = Field(gt=0, description="input weight (the profile's, e.g. 1 or 10)")
     signal: str = Field(description="human name of the signal through the pot")
     coefficient: float = Field(description="the design coefficient this pot realises (V/V, signed)")
     realized: float = Field(description="signed coefficient realised: sign * setting * weight")

@@ -104,3 +104,18 @@ def test_rho_auto_reports_each_try(tmp_path: Path):
     tries = json.loads(r.stdout)["estimator"]["rho_tries"]
     assert [t["rho"] for t in tries] == [10.0**k for k in range(len(tries))]
     assert tries[-1]["accepted"] and not any(t["accepted"] for t in tries[:-1])
+
+
+def test_zero_at_origin_is_not_stabilisable(tmp_path: Path):
+    t = (DESIGNS / "thesis-case3.toml").read_text().replace("state_scale = 10.0", "state_scale = 10.0\nzero = 0.0")
+    p = tmp_path / "z.toml"
+    p.write_text(t)
+    r = run("design", str(p))
+    assert r.returncode == 2 and "actuator.zero" in r.stderr and "not stabilisable" in r.stderr
+
+
+def test_usage_errors_are_one_line():
+    for args in (["design"], ["nosuch"], ["simulate", "designs/thesis-ch5.toml", "--scenario", "sims/hold-120s.toml",
+                                          "-o", "/tmp/never", "--runs", "0"]):
+        r = run(*args)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr

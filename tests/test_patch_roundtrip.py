@@ -136,3 +136,31 @@ def test_a_flipped_sign_is_caught():
     bad = Netlist.model_validate(data)
     with pytest.raises(AssertionError):
         check_roundtrip(d, bad, m.pot_resolution)
+
+
+@pytest.mark.parametrize("name", ["thesis-ch5", "bench-recommended"])
+def test_second_machine_profile_patches_and_roundtrips(name):
+    # THE ANALOG THING: integrators only on I1-I5, summers S1-S4, single-input inverters N1-N4
+    d, _ = design_from_path(design_path(name))
+    that = load_machine("the-analog-thing")
+    net = build_patch(d, that)
+    assert net.machine == "the-analog-thing"
+    slots = {a.id: a for a in that.amplifiers}
+    for a in net.amplifiers:
+        want = "integrator" if a.role in ("integrator", "lag") else a.role
+        assert want in slots[a.id].roles
+    check_roundtrip(d, net, that.pot_resolution)
+
+
+def test_weights_come_from_the_profile():
+    # a machine with x1 and x5 inputs puts theta (2.67) on x5 through a pot of 0.534
+    d, m = design_from_path(design_path("thesis-ch5"))
+    data = m.model_dump()
+    data["input_weights"] = [1, 5]
+    for a in data["amplifiers"]:
+        a["inputs"] = {"x1": 3, "x5": 3}
+    m5 = type(m).model_validate(data)
+    net = build_patch(d, m5)
+    p = next(p for p in net.pots if p.signal == "theta")
+    assert p.weight == 5 and p.setting == pytest.approx(0.534, abs=1e-9)
+    check_roundtrip(d, net, m5.pot_resolution)

@@ -27,10 +27,13 @@ def cli() -> None:
     """From an optimal cart-pendulum controller to a checked Comdyna GP-6 patch.
 
     \b
-    patchgen design SPEC        LQR / Kalman / LTR design and its margins
-    patchgen patch SPEC -o DIR  netlist, pot table, patch sheet, wiring diagram
-    patchgen sweep SPEC         gains, margins and pots with parameters off by 10%
-    patchgen recommend SPEC -o DIR  simulate every realisation on the bench, write the best patch
+    patchgen design SPEC                 LQR / Kalman / LTR design and its margins
+    patchgen patch SPEC -o DIR           netlist, pot table, patch sheet, wiring diagram
+    patchgen simulate SPEC --scenario X -o DIR   the patched circuit on the bench
+    patchgen spice SPEC --scenario X -o DIR      the patch checked by ngspice
+    patchgen recommend SPEC -o DIR       every realisation on the bench, the best patch
+    patchgen swingup SPEC -o DIR         pump-up, hand-off, hold with the patch
+    patchgen sweep SPEC                  gains, margins, pots with parameters off by 10%
     """
 
 
@@ -48,4 +51,17 @@ _register()
 
 
 def main() -> None:
-    cli(prog_name="patchgen")
+    """Run the CLI; a usage error (bad option, missing argument) is one line and exit 2."""
+    try:
+        rv = cli.main(prog_name="patchgen", standalone_mode=False)
+    except click.UsageError as exc:
+        cmd = exc.ctx.command_path if exc.ctx else "patchgen"
+        click.echo(f"{cmd}: {exc.format_message()} (see {cmd} --help)", err=True)
+        sys.exit(2)
+    except click.ClickException as exc:
+        click.echo(f"patchgen: {exc.format_message()}", err=True)
+        sys.exit(exc.exit_code)
+    except click.Abort:
+        click.echo("patchgen: aborted", err=True)
+        sys.exit(1)
+    sys.exit(rv if isinstance(rv, int) else 0)

@@ -1,0 +1,34 @@
+"""Same spec and seed, same bytes out: every file patchgen writes."""
+
+import subprocess
+import sys
+
+import pytest
+
+from .conftest import ROOT
+
+
+def run(*args):
+    r = subprocess.run([sys.executable, "-m", "patchgen", *args], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+
+
+@pytest.mark.parametrize("args", [
+    ["patch", "designs/thesis-ch5.toml", "--runs", "4"],
+    ["simulate", "designs/bench-recommended.toml", "--scenario", "sims/finger-push.toml", "--runs", "3"],
+])
+def test_two_runs_same_bytes(tmp_path, args):
+    run(*args, "-o", str(tmp_path / "a"))
+    run(*args, "-o", str(tmp_path / "b"))
+    a = sorted(p.name for p in (tmp_path / "a").iterdir())
+    assert a == sorted(p.name for p in (tmp_path / "b").iterdir()) and a
+    for name in a:
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
+
+
+def test_failed_patch_writes_nothing(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "patchgen", "patch", "designs/thesis-case1.toml", "-o", str(tmp_path / "o")],
+                       capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 2 and "needs" in r.stderr and "has 8 amplifiers" in r.stderr
+    assert not (tmp_path / "o").exists()
+    assert [p.name for p in tmp_path.iterdir()] == []

@@ -33,13 +33,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from patchgen.bench import load_bench  # noqa: E402
-from patchgen.circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER, compile_circuit  # noqa: E402
-from patchgen.machine import load_machine  # noqa: E402
-from patchgen.netlist import read_netlist  # noqa: E402
-from patchgen.plant import PlantParams, nonlinear_rhs  # noqa: E402
-from patchgen.scenario import Scenario, load_scenario  # noqa: E402
-from patchgen.simulate import simulate  # noqa: E402
+from patchgen.bench import load_bench
+from patchgen.circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER, compile_circuit
+from patchgen.machine import load_machine
+from patchgen.netlist import read_netlist
+from patchgen.plant import PlantParams, nonlinear_rhs
+from patchgen.scenario import Scenario, load_scenario
+from patchgen.simulate import simulate
 
 NETLIST = ROOT / "tests/fixtures/ch5-netlist-example.json"
 # thesis table B.1 (the design spec, designs/thesis-ch5.toml, will carry these)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 from .errors import ResourceError
 from .machine import MachineProfile
-from .netlist import (AmpInput, Amplifier, ControlOutput, Netlist, Pot, SensorInput, Signal)
+from .netlist import AmpInput, Amplifier, ControlOutput, Netlist, Pot, SensorInput, Signal
 from .realization import SENSOR_LABELS, SENSOR_UNITS, Block, Realization, Term
 
 ROLE = {"sum": "summer", "integrate": "integrator", "differentiate": "differentiator", "lag": "lag"}
@@ -75,7 +75,7 @@ def _plan_terms(real: Realization, machine: MachineProfile, source: str):
     changed = True
     while changed:
         changed = False
-        for name in list(used):
+        for name in sorted(used):
             for t in kept.get(name, []):
                 if t.signal not in used and t.signal in kept:
                     used.add(t.signal)
@@ -140,7 +140,7 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
     """Place the realization on the machine; a shortfall raises ResourceError (one line)."""
     blocks, kept, notes, too_big = _plan_terms(real, machine, source)
     _check_lower_bound(blocks, kept, machine, source)
-    P, inverted, pre = _search(blocks, kept, machine)
+    P, inverted, _ = _search(blocks, kept, machine)
     stages: list[_Stage] = []
     wanted: dict[tuple[str, str, float], float] = {}
     for b in blocks:

@@ -278,10 +278,10 @@ def _noise_shaped_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray)
     fixed = e.rolloff_s if e.kind == "filtered_differentiator" else e.observer_pole
     choice = None
     if e.kind == "filtered_differentiator":
-        build = lambda r: differentiator_controller(model, K, r)  # noqa: E731
+        build = lambda r: differentiator_controller(model, K, r)
         grid = corner.ROLLOFF_GRID_S
     else:
-        build = lambda p: reduced_observer_controller(model, K, reduced_observer(model, p))  # noqa: E731
+        build = lambda p: reduced_observer_controller(model, K, reduced_observer(model, p))
         grid = corner.POLE_GRID
     noise = corner.noise_model(spec, load_bench(spec.bench, spec.path), model)
     if fixed is None:

@@ -360,8 +360,7 @@ def _track_order(nets: dict[str, _Net], channel: int) -> list[str]:
 
 def wiring_svg(netlist: Netlist) -> str:
     """The wiring diagram of ``netlist`` as an SVG document (same netlist -> same bytes)."""
-    level, places, nets, n_rows, out_stage, out_row, slots = _layout(netlist)
-    sensors = {s.id: s for s in netlist.sensors}
+    _level, places, nets, n_rows, out_stage, out_row, slots = _layout(netlist)
     pots = {p.id: p for p in netlist.pots}
 
     # Vertical geometry: gaps (with their lanes) and rows, top to bottom.

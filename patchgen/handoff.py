@@ -9,8 +9,8 @@ containing no sampled start from which the controller fails to recover.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 from scipy.linalg import solve_continuous_lyapunov
@@ -61,7 +61,7 @@ class Zone:
         return bool(inside) if np.ndim(inside) == 0 else inside
 
     @staticmethod
-    def box(half_widths: tuple[float, float, float, float], source: str = "box") -> "Zone":
+    def box(half_widths: tuple[float, float, float, float], source: str = "box") -> Zone:
         """A zone given by bounds only (e.g. |theta| < 10 deg and the rest)."""
         h = np.asarray(half_widths, dtype=float)
         return Zone(P=np.diag(1.0 / h**2), r=float(STATE_COUNT), half_widths=tuple(map(float, h)),

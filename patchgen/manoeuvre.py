@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 
 from .bench import BenchProfile
+from .handoff import Zone, default_spread, estimate_zone, lyapunov_matrix, wrap_angle
 from .machine import MachineProfile
 from .netlist import Netlist
 from .plant import PlantParams
 from .scenario import InitialState, Scenario
 from .simulate import SimResult, simulate
-from .handoff import Zone, default_spread, estimate_zone, lyapunov_matrix, wrap_angle
 from .swingup import SwingUpResult
 from .swingup_run import swing_up
 

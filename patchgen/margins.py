@@ -83,9 +83,9 @@ def loop_margins(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> Margins:
     if modal:
         cm, bm = (C @ V)[0], np.linalg.solve(V, B)[:, 0]
         cb = cm * bm
-        T = lambda w: cb @ (1.0 / (1j * np.atleast_1d(w)[None, :] - lam[:, None]))  # noqa: E731
+        T = lambda w: cb @ (1.0 / (1j * np.atleast_1d(w)[None, :] - lam[:, None]))
     else:
-        T = lambda w: _freqresp(A, B, C, np.atleast_1d(w))  # noqa: E731
+        T = lambda w: _freqresp(A, B, C, np.atleast_1d(w))
     w = _W_GRID
     # phase crossovers: Im T = 0 with Re T < 0; also w -> 0
     phase_x = [x for x in _roots(lambda v: T(v).imag, w) if T(np.array([x]))[0].real < 0]
@@ -122,6 +122,6 @@ def loop_margins(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> Margins:
             lag = math.radians((180.0 + ang) % 360.0) / wc
             delay = lag if delay is None else min(delay, lag)
         pm, pm_w = abs(best[0]), best[1]
-    f = lambda v: None if v is None else float(v)  # noqa: E731
+    f = lambda v: None if v is None else float(v)
     return Margins(stable, f(lower), f(upper), f(pm), f(pm_w), f(delay),
                    [float(x) for x in gain_x], [float(x) for x in phase_x])

@@ -19,13 +19,13 @@ class PlantParams:
 
     M: float
     m: float
-    l: float  # noqa: E741  (the thesis's symbol)
+    l: float
     g: float
     b_VF: float
     c: float
     d: float
 
-    def scaled(self, **factors: float) -> "PlantParams":
+    def scaled(self, **factors: float) -> PlantParams:
         """A copy with named parameters multiplied by the given factors (for sweeps)."""
         return replace(self, **{k: getattr(self, k) * f for k, f in factors.items()})
 

@@ -17,8 +17,8 @@ before ranking so the order is deterministic.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from .bench import BenchProfile
 from .design import Design, design
@@ -79,7 +79,7 @@ class Candidate:
     def rank_key(self, order: int):
         if self.fraction_ok is None:
             return (1, 0.0, 0.0, 0.0, 0.0, order)
-        r = lambda x, n: -round(x, n) if x is not None and math.isfinite(x) else (-1e9 if x else 0.0)  # noqa: E731
+        r = lambda x, n: -round(x, n) if x is not None and math.isfinite(x) else (-1e9 if x else 0.0)
         return (0, -round(self.fraction_ok, 6), r(self.gm_db, 1), r(self.pm_deg, 1),
                 round(self.worst_swing_V or 0.0, 2), order)
 

@@ -30,7 +30,7 @@ class InitialState(_Strict):
     theta_dot: float = 0.0
 
     @model_validator(mode="after")
-    def _one_angle(self) -> "InitialState":
+    def _one_angle(self) -> InitialState:
         if self.theta is not None and self.theta_deg is not None:
             raise ValueError("give theta (rad) or theta_deg, not both")
         return self
@@ -60,7 +60,7 @@ class Disturbance(_Strict):
     size_m: float | None = None
 
     @model_validator(mode="after")
-    def _fields_for_kind(self) -> "Disturbance":
+    def _fields_for_kind(self) -> Disturbance:
         for name in _NEEDS[self.kind]:
             if getattr(self, name) is None:
                 raise ValueError(f"{name} is needed for kind {self.kind!r}")

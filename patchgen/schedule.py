@@ -26,8 +26,8 @@ from .plant import PlantParams, nonlinear_rhs
 from .swingup import (
     Schedule,
     ScheduleReplay,
-    Switch,
     SwingUpResult,
+    Switch,
     hanging_state,
     saturated_state_feedback,
     simulate,
@@ -77,7 +77,7 @@ def _batch_terminal(
 
     Returns x(T_F) (4, B) by cubic Hermite interpolation on the grid, and max |s| on [0, T_F].
     """
-    n, B = starts.shape
+    _, B = starts.shape
     ends = np.vstack([starts[1:], np.full((1, B), np.inf)])
     x = np.repeat(hanging_state()[:, None], B, axis=1)
     k_T = np.floor(T_F / h).astype(int)

@@ -22,19 +22,30 @@ import csv
 import io
 import json
 import math
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Callable
 
 import numba
 import numpy as np
 
 from .bench import BenchProfile
 from .circuit import Circuit, compile_circuit
-from .engine import (ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, DIST_CART_FORCE, DIST_STEP,
-                     DIST_TIP_FORCE, HISTORY_CHANNELS, EngineConfig, default_step, draw_batch,
-                     noise_process, run_batch)
+from .engine import (
+    ACT_GAIN,
+    ACT_LAG,
+    ACT_LAG_ZERO,
+    DIST_CART_FORCE,
+    DIST_STEP,
+    DIST_TIP_FORCE,
+    HISTORY_CHANNELS,
+    EngineConfig,
+    default_step,
+    draw_batch,
+    noise_process,
+    run_batch,
+)
 from .errors import InputError
 from .machine import MachineProfile
 from .netlist import Netlist

@@ -8,7 +8,7 @@ profile named by ``bench`` (patchgen/benches/), kept apart on purpose.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal, Union
+from typing import Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr
@@ -29,7 +29,7 @@ class PlantSpec(_Strict):
 
     M: float = Field(gt=0, description="cart mass, kg")
     m: float = Field(gt=0, description="pendulum mass, kg")
-    l: float = Field(gt=0, description="effective pendulum length, m")  # noqa: E741
+    l: float = Field(gt=0, description="effective pendulum length, m")
     g: float = Field(default=9.807, gt=0, description="gravity, m/s^2")
     b_VF: float = Field(ge=0, description="cart viscous friction, kg/s")
     c: float = Field(ge=0, description="pendulum rotational friction, kg m^2/s")
@@ -62,7 +62,7 @@ class WeightsSpec(_Strict):
     """LQR weights: Q (diagonal by state name, or a full matrix in state order) and R, or
     Bryson's maximum excursions (eq. 4.9-4.10)."""
 
-    Q: Union[dict[str, float], list[list[float]], None] = None
+    Q: dict[str, float] | list[list[float]] | None = None
     R: float | None = None
     bryson: dict[str, float] | None = None
 
@@ -76,10 +76,10 @@ class IntegratorsSpec(_Strict):
 
 class EstimatorSpec(_Strict):
     kind: Literal["none", "differentiator", "filtered_differentiator", "reduced_observer", "kalman"] = "none"
-    W: Union[float, list[list[float]]] = 1.0
-    V: Union[list[float], list[list[float]]] = [1.0, 1.0, 1.0]
-    Gamma: Union[Literal["B"], list[float], list[list[float]]] = "B"
-    rho: Union[float, Literal["auto"]] = 1.0
+    W: float | list[list[float]] = 1.0
+    V: list[float] | list[list[float]] = [1.0, 1.0, 1.0]
+    Gamma: Literal["B"] | list[float] | list[list[float]] = "B"
+    rho: float | Literal["auto"] = 1.0
     rho_max: float = Field(default=1e12, gt=0)
     rolloff_s: float | None = Field(default=None, gt=0, description="differentiator roll-off, s "
                                     "(filtered_differentiator: none = chosen from the bench noise)")

@@ -19,8 +19,9 @@ m g l cos(theta), so E0 = m g l upright at rest and -m g l hanging at rest.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable, Literal, Protocol
+from typing import Literal, Protocol
 
 import numpy as np
 

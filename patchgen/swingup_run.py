@@ -130,5 +130,13 @@ def compare_strategies(
     return rows
 
 
-__all__ = ["swing_up", "compare_strategies", "optimised_schedule", "default_zone", "robustness",
-           "StrategySummary", "SupervisorSettings", "EnergySettings"]
+__all__ = [
+    "EnergySettings",
+    "StrategySummary",
+    "SupervisorSettings",
+    "compare_strategies",
+    "default_zone",
+    "optimised_schedule",
+    "robustness",
+    "swing_up",
+]

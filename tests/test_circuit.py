@@ -6,8 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from patchgen.circuit import (DIFFERENTIATOR, INTEGRATOR, SUMMER, AlgebraicLoopError,
-                              compile_circuit)
+from patchgen.circuit import DIFFERENTIATOR, INTEGRATOR, SUMMER, AlgebraicLoopError, compile_circuit
 from patchgen.errors import InputError
 from patchgen.machine import load_machine
 from patchgen.netlist import Netlist, read_netlist

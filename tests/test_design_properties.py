@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from patchgen.design import design
 from patchgen.spec import DesignSpec, check_spec
 
-pos = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False)  # noqa: E731
+pos = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False)
 
 
 @st.composite

@@ -73,7 +73,7 @@ def test_sign_check_follows_u_equals_minus_K_x():
     # K_theta < 0, so a positive theta needs a positive force, hence a positive u_c
     # (conventions.md); every K in section 5.3 is negative, so every path must give +.
     _, _, md = _render()
-    checks = re.findall(r"^\| (P\d) \| [^|]+ \| [^|]+ \| \*\*(.)\*\* \|$", md, flags=re.M)
+    checks = re.findall(r"^\| (P\d) \| [^|]+ \| [^|]+ \| \*\*(.)\*\* \|$", md, flags=re.MULTILINE)
     assert checks == [("P1", "+"), ("P2", "+"), ("P3", "+"), ("P4", "+"), ("P5", "+")]
 
 

@@ -2,13 +2,21 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from patchgen.handoff import Zone, estimate_zone, lqr_zone, lyapunov_matrix, default_spread
+from patchgen.handoff import Zone, default_spread, estimate_zone, lqr_zone, lyapunov_matrix
 from patchgen.plant import PlantParams
 from patchgen.schedule import optimise_schedule, replay, schedule_from_result
 from patchgen.swingup import (
-    BRAKE, COAST, PUSH, Supervisor, hanging_state, pendulum_energy, simulate, upright_energy,
+    BRAKE,
+    COAST,
+    PUSH,
+    Supervisor,
+    hanging_state,
+    pendulum_energy,
+    simulate,
+    upright_energy,
 )
 from patchgen.swingup_output import patch_sheet_rows, write_outputs
 from patchgen.swingup_run import swing_up

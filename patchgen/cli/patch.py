@@ -9,10 +9,10 @@ from ..bench import load_bench
 from ..diagram import wiring_svg
 from ..model import plant_params
 from ..outputs import write_files
-from ..prediction import diagnosis_note, predict, prediction_rows
-from ..sheet import SheetSection, SheetSummary, render_sheet
 from ..patch import build_patch
 from ..pottable import pot_table, pots_csv
+from ..prediction import diagnosis_note, predict, prediction_rows
+from ..sheet import SheetSection, SheetSummary, render_sheet
 from . import cli
 from .design import design_from_path
 

@@ -17,11 +17,11 @@ from ..errors import InputError
 from ..machine import load_machine
 from ..outputs import write_files
 from ..pottable import pot_table
-from ..recommend import prepare, evaluate, Recommendation, table_markdown, table_rows
+from ..recommend import Recommendation, evaluate, prepare, table_markdown, table_rows
 from ..scenario import load_scenario
+from ..sheet import SheetSection
 from ..spec import load_spec
 from . import cli
-from ..sheet import SheetSection
 from .patch import patch_files
 
 

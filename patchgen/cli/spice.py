@@ -18,7 +18,15 @@ from ..outputs import write_files
 from ..patch import build_patch
 from ..scenario import load_scenario
 from ..simulate import simulate
-from ..spice import NgspiceError, NgspiceMissing, SpiceSettings, compare, plot_comparison, run_ngspice, spice_deck
+from ..spice import (
+    NgspiceError,
+    NgspiceMissing,
+    SpiceSettings,
+    compare,
+    plot_comparison,
+    run_ngspice,
+    spice_deck,
+)
 from . import cli
 from .design import design_from_path
 

@@ -14,7 +14,6 @@ from ..sweep import parse_by, parse_vary, sweep
 from . import cli
 from .design import design_from_path
 
-
 DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "sims" / "offset-10deg.toml"
 
 

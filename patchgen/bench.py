@@ -7,8 +7,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from .errors import InputError
-from .validation import read_toml, validate
+from .validation import load_profile
 
 BENCH_DIR = Path(__file__).parent / "benches"
 
@@ -49,16 +48,6 @@ class BenchProfile(_Strict):
     track: BenchTrack = BenchTrack()
 
 
-def available_benches() -> list[str]:
-    return sorted(p.stem for p in BENCH_DIR.glob("*.toml"))
-
-
 def load_bench(name_or_path: str, source: str = "", field: str = "bench") -> BenchProfile:
     """Load a shipped bench profile by id (e.g. 'uw-1991') or a file by path."""
-    path = Path(name_or_path)
-    if not path.suffix:
-        path = BENCH_DIR / f"{name_or_path}.toml"
-        if not path.exists():
-            raise InputError(source or name_or_path, field,
-                             f"unknown bench {name_or_path!r} (known: {', '.join(available_benches())})")
-    return validate(BenchProfile, read_toml(path), str(path))
+    return load_profile(BenchProfile, BENCH_DIR, name_or_path, "bench", source, field)

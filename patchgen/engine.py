@@ -189,6 +189,17 @@ def plant_rhs(p, th, sd, thd, force, tip_force):
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
+def _rail(out, sat, clip):
+    """An amplifier output held inside the rails (when clipping is on)."""
+    if clip:
+        if out > sat:
+            return sat
+        if out < -sat:
+            return -sat
+    return out
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
 def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_ptr, in_src,
              in_gain, param1, param2, drift, sat, clip, sig, raw, dz_out):
     """Evaluate sensors and amplifiers in order: sig (clipped if clip), raw (before clipping),
@@ -206,12 +217,7 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
         if kd == INTEGRATOR or kd == LAG:
             out = zt[j] + nz_a[j]
             raw[j] = out
-            if clip:
-                if out > sat:
-                    out = sat
-                elif out < -sat:
-                    out = -sat
-            sig[ns + j] = out
+            sig[ns + j] = _rail(out, sat, clip)
     # then summers and differentiators, in evaluation order
     for j in range(na):
         kd = amp_kind[j]
@@ -228,12 +234,7 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
             dz_out[j] = param2[j] * (acc - zt[j])
         out += nz_a[j]
         raw[j] = out
-        if clip:
-            if out > sat:
-                out = sat
-            elif out < -sat:
-                out = -sat
-        sig[ns + j] = out
+        sig[ns + j] = _rail(out, sat, clip)
     # last, the integrating amplifiers' inputs, now that every signal of this instant is known
     for j in range(na):
         kd = amp_kind[j]

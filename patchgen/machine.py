@@ -7,8 +7,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from .errors import InputError
-from .validation import read_toml, validate
+from .validation import load_profile
 
 PROFILE_DIR = Path(__file__).parent / "machines"
 
@@ -80,17 +79,6 @@ class MachineProfile(_Strict):
                 + self.imperfections.integrator_bias_A / c.integrator_capacitor_F)
 
 
-def available_machines() -> list[str]:
-    return sorted(p.stem for p in PROFILE_DIR.glob("*.toml"))
-
-
 def load_machine(name_or_path: str, source: str = "", field: str = "machine") -> MachineProfile:
     """Load a shipped profile by id (e.g. 'gp6') or a profile file by path."""
-    path = Path(name_or_path)
-    if not path.suffix:
-        path = PROFILE_DIR / f"{name_or_path}.toml"
-        if not path.exists():
-            raise InputError(source or name_or_path, field,
-                             f"unknown machine {name_or_path!r} (known: {', '.join(available_machines())})")
-    data = read_toml(path)
-    return validate(MachineProfile, data, str(path))
+    return load_profile(MachineProfile, PROFILE_DIR, name_or_path, "machine", source, field)

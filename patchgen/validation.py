@@ -61,3 +61,14 @@ def validate(model: type[M], data: Any, source: str, prefix: str = "") -> M:
         if err["type"] not in ("missing", "extra_forbidden") and isinstance(got, (int, float, str, bool)):
             msg = f"{msg} (got {got!r})"
         raise InputError(source, where, msg) from None
+
+
+def load_profile(model: type[M], folder: Path, name_or_path: str, kind: str, source: str, field: str) -> M:
+    """A shipped profile by id (a file ``folder/<id>.toml``) or any profile file by path."""
+    path = Path(name_or_path)
+    if not path.suffix:
+        path = folder / f"{name_or_path}.toml"
+        if not path.exists():
+            known = ", ".join(sorted(p.stem for p in folder.glob("*.toml")))
+            raise InputError(source or name_or_path, field, f"unknown {kind} {name_or_path!r} (known: {known})")
+    return validate(model, read_toml(path), str(path))

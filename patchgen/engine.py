@@ -199,7 +199,7 @@ def _rail(out, sat, clip):
     return out
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_ptr, in_src,
              in_gain, param1, param2, drift, sat, clip, sig, raw, dz_out):
     """Evaluate sensors and amplifiers in order: sig (clipped if clip), raw (before clipping),
@@ -211,27 +211,22 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
             q -= s_ref
         sig[i] = sensor_gain[i] * q + nz_s[i]
     na = amp_kind.shape[0]
-    # integrating amplifiers first: their outputs are states, whatever reads them comes later
+    # outputs in evaluation order (the compiler puts integrators and lags, whose outputs are their
+    # states, before everything that reads them)
     for j in range(na):
         kd = amp_kind[j]
         if kd == INTEGRATOR or kd == LAG:
-            out = zt[j] + nz_a[j]
-            raw[j] = out
-            sig[ns + j] = _rail(out, sat, clip)
-    # then summers and differentiators, in evaluation order
-    for j in range(na):
-        kd = amp_kind[j]
-        if kd == INTEGRATOR or kd == LAG:
-            continue
-        acc = 0.0
-        for k in range(in_ptr[j], in_ptr[j + 1]):
-            acc += in_gain[k] * sig[in_src[k]]
-        if kd == SUMMER:
-            out = -acc
-            dz_out[j] = 0.0
-        else:  # DIFFERENTIATOR with roll-off
-            out = -param1[j] * (acc - zt[j])
-            dz_out[j] = param2[j] * (acc - zt[j])
+            out = zt[j]
+        else:
+            acc = 0.0
+            for k in range(in_ptr[j], in_ptr[j + 1]):
+                acc += in_gain[k] * sig[in_src[k]]
+            if kd == SUMMER:
+                out = -acc
+                dz_out[j] = 0.0
+            else:  # DIFFERENTIATOR with roll-off
+                out = -param1[j] * (acc - zt[j])
+                dz_out[j] = param2[j] * (acc - zt[j])
         out += nz_a[j]
         raw[j] = out
         sig[ns + j] = _rail(out, sat, clip)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import sys
 
 import click
@@ -10,8 +11,20 @@ from .. import __version__
 from ..errors import InputError
 
 
+COMMANDS = ("design", "patch", "simulate", "spice", "recommend", "swingup", "sweep")
+
+
 class _Group(click.Group):
-    """Turns an InputError anywhere into one line on stderr and its exit status."""
+    """Loads each command's module only when that command runs (a design need not import the
+    simulator), and turns an InputError anywhere into one line on stderr and its exit status."""
+
+    def list_commands(self, ctx):
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx, name):
+        if name in COMMANDS and name not in self.commands:
+            importlib.import_module(f"{__name__}.{name}")  # its @cli.command registers it
+        return super().get_command(ctx, name)
 
     def invoke(self, ctx):
         try:
@@ -35,19 +48,6 @@ def cli() -> None:
     patchgen swingup SPEC -o DIR         pump-up, hand-off, hold with the patch
     patchgen sweep SPEC                  gains, margins, pots with parameters off by 10%
     """
-
-
-def _register() -> None:
-    from . import design as _design  # noqa: F401
-    from . import patch as _patch  # noqa: F401
-    from . import recommend as _recommend  # noqa: F401
-    from . import simulate as _simulate  # noqa: F401
-    from . import spice as _spice  # noqa: F401
-    from . import sweep as _sweep  # noqa: F401
-    from . import swingup as _swingup  # noqa: F401
-
-
-_register()
 
 
 def main() -> None:

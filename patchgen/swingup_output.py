@@ -36,6 +36,25 @@ def patch_sheet_rows(result: SwingUpResult) -> list[list[str]]:
     return rows
 
 
+def compact_schedule_rows(result: SwingUpResult) -> tuple[list[str], list[list[str]]]:
+    """The switching table one series a row (push force and the three switch times), for the sheet."""
+    header = ["series", "push (N)", "push at (s)", "reverse at (s)", "coast at (s)"]
+    series: dict[int, dict[int, dict]] = {}
+    rows: list[list[str]] = []
+    for r in result.table_rows():
+        if r["phase"] is None:
+            continue
+        series.setdefault(r["series"], {})[r["phase"]] = r
+    for k in sorted(series):
+        ph = series[k]
+        push = ph.get(1)
+        rows.append([str(k), "" if push is None else f"{push['force_N']:+.1f}",
+                     *("" if ph.get(i) is None else f"{ph[i]['time_s']:.3f}" for i in (1, 2, 3))])
+    if result.handoff_time is not None:
+        rows.append(["hand-off", "", f"{result.handoff_time:.3f}", "", ""])
+    return header, rows
+
+
 def switching_table_markdown(result: SwingUpResult) -> str:
     rows = patch_sheet_rows(result)
     lines = ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]

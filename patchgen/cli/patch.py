@@ -44,12 +44,11 @@ def bench_section(d, machine, net, runs_hold: int) -> SheetSection:
     bench = load_bench(d.spec.bench, d.spec.path)
     plant = plant_params(d.spec)
     header, rows = prediction_rows(predict(net, plant, bench, machine, runs_hold=runs_hold))
-    note = (f"Simulated from this netlist on the {bench.name} bench: actuator {bench.actuator.model} "
-            f"(tau {bench.actuator.tau:g} s, dead zone +/-{bench.actuator.dead_zone_V:g} V, "
-            f"limit {bench.actuator.force_limit_N:g} N), sensor noise, integrator drift "
-            f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s (a profile default: no GP-6 figure is "
-            f"published), saturation at +/-{machine.imperfections.saturation_V:g} V, limit switches at "
-            f"+/-{d.spec.plant.d / 2:g} m. " + diagnosis_note(net, plant, bench))
+    note = (f"From this netlist on the {bench.id} bench: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
+            f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; drift "
+            f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s (profile default, no GP-6 figure published); "
+            f"rails +/-{machine.imperfections.saturation_V:g} V; switches at +/-{d.spec.plant.d / 2:g} m. "
+            + diagnosis_note(net, plant, bench))
     return SheetSection("Predicted on the bench", header, rows, note)
 
 

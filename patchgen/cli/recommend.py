@@ -30,19 +30,20 @@ def why_section(rec: Recommendation, machine) -> SheetSection:
     header = ["rank", "realisation", "held", "fallen", "tripped", "overloaded", "GM lower/upper (dB)", "PM (deg)",
               "worst swing (V)", "amps/pots"]
     rows = []
+    misfits = []
     for r in table_rows(rec):
         if r["error"]:
-            rows.append(["-", r["realisation"], "does not fit: " + r["error"], "", "", "", "", "", "", ""])
+            rows.append(["-", r["realisation"], "does not fit", "", "", "", "", "", "", ""])
+            misfits.append(f"{r['realisation']}: {r['error']}")
             continue
         rows.append([str(r["rank"]), f"{r['realisation']} ({r['estimator']})", f"{r['fraction_ok']:.1%}",
                      f"{r['fraction_fallen']:.1%}", f"{r['fraction_tripped']:.1%}", f"{r['fraction_overloaded']:.1%}",
                      f"{_fmt(r['lower_gm_db'], '{:+.1f}', 'none')} / {_fmt(r['upper_gm_db'], '{:+.1f}', 'inf')}",
                      _fmt(r["pm_deg"], "{:.1f}"), f"{r['worst_swing_V']:.2f} of {machine.reference_V:g}",
                      f"{r['amplifiers']}/{r['pots']}"])
-    note = (f"Each realisation that fits was designed, allocated and simulated on the bench ({rec.scenario.name}, "
-            f"{rec.runs} noise seeds from seed {rec.seed}, bench actuator, noise and drift). Ranked by the "
-            "fraction of runs held (pendulum up, cart inside the switches, no overload), then gain margin, "
-            "phase margin and worst amplifier swing.")
+    note = (f"Bench Monte Carlo: {rec.scenario.name}, {rec.runs} seeds from {rec.seed}, bench actuator, noise and "
+            "drift. Ranked by runs held (up, inside the switches, no overload), then gain margin, phase margin, "
+            "worst swing." + (" Not fitting: " + "; ".join(misfits) + "." if misfits else ""))
     return SheetSection("Why this patch", header, rows, note)
 
 DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "sims" / "hold-120s.toml"

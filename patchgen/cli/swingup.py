@@ -17,7 +17,7 @@ from ..outputs import write_files
 from ..patch import build_patch
 from ..sheet import SheetSection
 from ..swingup import STRATEGIES
-from ..swingup_output import patch_sheet_rows, write_outputs
+from ..swingup_output import compact_schedule_rows, patch_sheet_rows, write_outputs
 from . import cli
 from .design import design_from_path
 from .patch import patch_files
@@ -55,7 +55,7 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, as_json, for
                "hold": None if m.hold is None else {k: v for k, v in m.hold.summary()["first_run"].items()
                                                     if k != "final_state"}}
     rows = patch_sheet_rows(p)
-    section = SheetSection(f"Pump-up schedule ({strategy}, {F:g} N)", rows[0], rows[1:],
+    section = SheetSection(f"Pump-up schedule ({strategy}, {F:g} N)", *compact_schedule_rows(p),
                            "Switch times for the operator or a sequencer, from hanging at rest; hand off (IC -> OP) "
                            "when the pendulum is in the zone. Computed for this design's plant model: an open-loop "
                            "schedule is fragile, the supervisory logic re-times itself on the measured states.")

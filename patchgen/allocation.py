@@ -261,7 +261,7 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                                     f"{slot_def.input_count(w)}")
             pot_id = None
             if setting is not None:
-                pot_id = f"P{len(pots) + 1}"
+                pot_id = _next_pot(pots, slot[st.key], machine)
                 q = _quantise(setting, res)
                 # realised signed coefficient from the wiring: the stage inverts; its output is
                 # out_pol * signal; the source arrives with polarity `have`
@@ -306,6 +306,18 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                    pot_resolution=res, sensors=sensors, amplifiers=amps, pots=pots,
                    output=ControlOutput(source=slot["u_c"], K_U_N_per_V=real.K_U),
                    operation=operation, notes=list(real.notes) + notes)
+
+
+def _next_pot(pots: list[Pot], amp_id: str, machine: MachineProfile) -> str:
+    """P1, P2, ... on one machine; on slaved units a pot of the amplifier's own unit while it has
+    one free (U1.P1 ...), else the first unit with a free pot."""
+    if machine.units == 1:
+        return f"P{len(pots) + 1}"
+    per_unit = machine.pot_count // machine.units
+    used = {u: sum(1 for p in pots if p.id.startswith(f"U{u}.")) for u in range(1, machine.units + 1)}
+    own = int(amp_id.split(".")[0][1:])
+    unit = own if used[own] < per_unit else next(u for u in used if used[u] < per_unit)
+    return f"U{unit}.P{used[unit] + 1}"
 
 
 def _signal_name(key: str, have: int | None, by_key: dict[str, _Stage], P: dict[str, int]) -> str:

@@ -68,9 +68,18 @@ class MachineProfile(_Strict):
     pot_set_mode: str
     overload_indicator: bool
     max_units: int = Field(ge=1)
+    units: int = Field(default=1, ge=1, description="machines slaved together in this profile (see slaved())")
     amplifiers: list[AmplifierSlot]
     components: Components
     imperfections: Imperfections
+
+    def slaved(self, units: int) -> "MachineProfile":
+        """``units`` machines slaved together as one: amplifiers U1.A1 ... U2.A8, pots times units."""
+        if units == 1:
+            return self
+        amps = [a.model_copy(update={"id": f"U{u}.{a.id}"}) for u in range(1, units + 1) for a in self.amplifiers]
+        return self.model_copy(update={"amplifiers": amps, "pot_count": self.pot_count * units, "units": units,
+                                       "name": f"{self.name} x{units} (slaved)"})
 
     def integrator_drift_V_per_s(self) -> float:
         """Drift rate of an integrator with no input: e_os/(R C) + i_b/C (gp6.md)."""

@@ -78,9 +78,10 @@ class Candidate:
 
     def rank_key(self, order: int):
         if self.fraction_ok is None:
-            return (1, 0.0, 0.0, 0.0, 0.0, order)
+            return (1, 0.0, 0, 0.0, 0.0, 0.0, order)
         r = lambda x, n: -round(x, n) if x is not None and math.isfinite(x) else (-1e9 if x else 0.0)
-        return (0, -round(self.fraction_ok, 6), r(self.gm_db, 1), r(self.pm_deg, 1),
+        units = self.netlist.units if self.netlist is not None else 1
+        return (0, -round(self.fraction_ok, 6), units, r(self.gm_db, 1), r(self.pm_deg, 1),
                 round(self.worst_swing_V or 0.0, 2), order)
 
 
@@ -120,10 +121,17 @@ def prepare(spec: DesignSpec, machine: MachineProfile) -> list[Candidate]:
             out.append(Candidate(label, kind, None, None, exc.message))
             continue
         try:
-            net = build_patch(d, machine)
+            net = build_patch(d, machine, 1)
         except InputError as exc:
-            out.append(Candidate(label, kind, d, None, exc.message))
-            continue
+            if machine.max_units == 1:
+                out.append(Candidate(label, kind, d, None, exc.message))
+                continue
+            try:  # slaved units, as the machine allows
+                net = build_patch(d, machine, "auto")
+                label = f"{label} ({net.units} slaved units)"
+            except InputError as exc2:
+                out.append(Candidate(label, kind, d, None, exc2.message))
+                continue
         out.append(Candidate(label, kind, d, net, None, estimator_detail=_detail(d)))
     return out
 

@@ -88,6 +88,9 @@ class EstimatorSpec(_Strict):
 
 
 class PatchSpec(_Strict):
+    units: int | Literal["auto"] = Field(
+        default=1, description="machines slaved together: a number, or \"auto\" for the fewest that fit "
+        "(at most the profile's max_units)")
     below_resolution: Literal["round", "minimum", "omit"] = Field(
         default="round", description="a coefficient below the pot resolution: round to the dial, "
         "set the minimum dial value, or leave the signal out")

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from patchgen.cli.design import design_from_path
 from patchgen.design import design
-from patchgen.errors import ResourceError
+from patchgen.errors import InputError, ResourceError
 from patchgen.machine import load_machine
 from patchgen.netlist import Netlist
 from patchgen.patch import build_patch
@@ -164,3 +164,25 @@ def test_weights_come_from_the_profile():
     p = next(p for p in net.pots if p.signal == "theta")
     assert p.weight == 5 and p.setting == pytest.approx(0.534, abs=1e-9)
     check_roundtrip(d, net, m5.pot_resolution)
+
+
+def test_two_slaved_units_when_one_is_not_enough():
+    # the reduced observer of the bench design needs 13 pots: too many for one GP-6 (8), fits two
+    d0, m = design_from_path(design_path("bench-recommended"))
+    sp = d0.spec.model_copy(update={"estimator": d0.spec.estimator.model_copy(update={"kind": "reduced_observer"})})
+    d = design(sp, default_rolloff_s=m.imperfections.differentiator_rolloff_s)
+    with pytest.raises(ResourceError):
+        build_patch(d, m, 1)
+    net = build_patch(d, m, "auto")
+    assert net.units == 2
+    assert all(a.id.startswith(("U1.", "U2.")) for a in net.amplifiers)
+    per_unit = {u: sum(p.id.startswith(f"U{u}.") for p in net.pots) for u in (1, 2)}
+    assert sum(per_unit.values()) == len(net.pots) and max(per_unit.values()) <= m.pot_count
+    check_roundtrip(d, net, m.pot_resolution)
+
+
+def test_units_beyond_the_profile_are_refused():
+    d, m = design_from_path(design_path("thesis-ch5"))
+    with pytest.raises(InputError) as exc:
+        build_patch(d, m, 3)
+    assert "patch.units" in exc.value.line() and "1 to 2" in exc.value.line()

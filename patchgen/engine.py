@@ -53,6 +53,7 @@ class EngineConfig:
     stride: int  # record every stride-th step into the history
     x0: np.ndarray  # plant state at t = 0
     plant: np.ndarray  # M, m, l, g, b_VF, c, half track (d/2)
+    plant_spread: np.ndarray  # per plant parameter: each run draws it uniformly within +/- this fraction
     limit_switches: bool
     sensor_state: np.ndarray
     sensor_gain: np.ndarray
@@ -124,29 +125,35 @@ class BatchOutput:
     history_length: np.ndarray  # samples recorded per history run (a run ends at a trip)
 
 
-def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]) -> tuple[np.ndarray, np.ndarray]:
+def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each run's random draws, from its own generator: the drift sign of each amplifier, then
     standard normals (steps + 1, sensors + amplifiers) when any noise is on (float32: noise
-    needs no more, and it halves the memory traffic). Drawn by numpy outside the compiled loop:
-    its bulk normals are fast, and a run's draws do not depend on threads or batches."""
+    needs no more, and it halves the memory traffic), then, with a parameter spread, the run's
+    plant. Drawn by numpy outside the compiled loop: its bulk normals are fast, and a run's
+    draws do not depend on threads or batches."""
     runs = len(rngs)
     n_amp = len(cfg.amp_kind)
     noisy = bool(cfg.sensor_noise_std.any() or cfg.amp_noise_std.any())
     signs = np.empty((runs, n_amp))
     shape = (runs, cfg.n_steps + 1, len(cfg.sensor_state) + n_amp) if noisy else (runs, 0, 0)
     gauss = np.empty(shape, dtype=np.float32)
+    plants = np.repeat(cfg.plant[None, :], runs, axis=0)
+    spread = cfg.plant_spread.any()
     for r, rng in enumerate(rngs):
         signs[r] = np.where(rng.random(n_amp) < 0.5, 1.0, -1.0)
         if noisy:
             rng.standard_normal(out=gauss[r], dtype=np.float32)
-    return signs, gauss
+        if spread:
+            plants[r] *= 1.0 + cfg.plant_spread * rng.uniform(-1.0, 1.0, cfg.plant.shape[0])
+    return signs, gauss, plants
 
 
-def run_batch(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray],
+def run_batch(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray, np.ndarray],
               n_history: int) -> BatchOutput:
     """One run per row of ``draws`` (see draw_batch), in parallel threads, without the GIL;
     histories for the first n_history runs."""
-    signs, gauss = draws
+    signs, gauss, plants = draws
     runs, n_amp = signs.shape
     n_samples = cfg.n_steps // cfg.stride + 2  # stride samples, and the last one off-stride
     out = BatchOutput(
@@ -158,7 +165,7 @@ def run_batch(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray],
         history=np.zeros((n_history, n_samples, len(HISTORY_CHANNELS) + n_amp)),
         history_length=np.zeros(n_history, dtype=np.int64),
     )
-    args = (cfg.dt, cfg.n_steps, cfg.stride, cfg.x0, cfg.plant, cfg.limit_switches,
+    args = (cfg.dt, cfg.n_steps, cfg.stride, cfg.x0, cfg.limit_switches,
             cfg.sensor_state, cfg.sensor_gain, cfg.sensor_noise_a, cfg.sensor_noise_std,
             cfg.amp_kind, cfg.in_ptr, cfg.in_src, cfg.in_gain, cfg.param1, cfg.param2, cfg.ic_V,
             cfg.drift, cfg.amp_noise_a, cfg.amp_noise_std, cfg.saturation_V, cfg.clip,
@@ -168,9 +175,9 @@ def run_batch(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray],
             out.max_abs_u_c, out.max_abs_force, out.overload_first, out.overload_time,
             out.final_state, out.history, out.history_length)
     if runs == 1:  # no thread launch: it costs more than a lone run on a busy machine
-        _one_run(0, signs[0], gauss[0], *args)
+        _one_run(0, signs[0], gauss[0], args[0], args[1], args[2], args[3], plants[0], *args[4:])
     else:
-        _batch(signs, gauss, *args)
+        _batch(signs, gauss, plants, *args)
     return out
 
 
@@ -421,7 +428,7 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
 
 
 @nb.njit(cache=True, parallel=True, nogil=True, error_model="numpy", fastmath=_FAST)
-def _batch(signs, gauss, h, n_steps, stride, x0, p, limit_on,
+def _batch(signs, gauss, plants, h, n_steps, stride, x0, limit_on,
            sensor_state, sensor_gain, sna, sns,
            amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,
            out_index, act, K_U, tau, dz, flim,
@@ -429,7 +436,7 @@ def _batch(signs, gauss, h, n_steps, stride, x0, p, limit_on,
            trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final, hist,
            hist_len):
     for r in nb.prange(signs.shape[0]):
-        _one_run(r, signs[r], gauss[r], h, n_steps, stride, x0, p, limit_on,
+        _one_run(r, signs[r], gauss[r], h, n_steps, stride, x0, plants[r], limit_on,
                  sensor_state, sensor_gain, sna, sns,
                  amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat,
                  clip, out_index, act, K_U, tau, dz, flim,

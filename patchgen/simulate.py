@@ -123,6 +123,7 @@ class SimSettings:
     actuator: str
     limit_switches: bool
     half_track_m: float
+    plant_spread: dict[str, float]
 
 
 @dataclass
@@ -159,8 +160,11 @@ class SimResult:
 def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
              scenario: Scenario, *, seed: int | None = None, runs: int = 1, ideal: bool = False,
              keep_history: bool = True,
-             progress: Callable[[int], None] | None = None) -> SimResult:
+             progress: Callable[[int], None] | None = None,
+             spread: dict[str, float] | None = None) -> SimResult:
     """Simulate ``runs`` runs of the scenario (seed from the argument, else the scenario's).
+    ``spread`` (e.g. {"M": 0.1, "l": 0.1}) draws each run's plant parameters uniformly within
+    those fractions of the nominal: the Monte Carlo then covers model error as well as noise.
 
     Run i draws from ``numpy.random.default_rng([seed, i])``, so run 0 of a Monte Carlo is the
     single run of the same seed. ``keep_history`` keeps the first run's time histories.
@@ -172,7 +176,7 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     base_seed = scenario.seed if seed is None else seed
     if not 0 <= base_seed < 2**63:
         raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")
-    cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal)
+    cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal, spread=spread)
 
     # batches of runs: enough for the threads, few progress calls, bounded noise memory
     per_run = (cfg.n_steps + 1) * (circuit.n_sensors + circuit.n_amps) * 4
@@ -232,10 +236,15 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     )
 
 
+SPREAD_ORDER = ("M", "m", "l", "g", "b_VF", "c", "d")  # the engine's plant vector (d: half track)
+
+
 def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
                   machine: MachineProfile, scenario: Scenario, *,
-                  ideal: bool = False) -> tuple[EngineConfig, SimSettings]:
-    """Resolve profiles, scenario and ``ideal`` into the engine's arrays (and a readable record)."""
+                  ideal: bool = False, spread: dict[str, float] | None = None) -> tuple[EngineConfig, SimSettings]:
+    """Resolve profiles, scenario and ``ideal`` into the engine's arrays (and a readable record).
+    ``spread`` gives, per plant parameter, the fraction within which each run draws it."""
+    spread = dict(spread or {})
     fastest = [1.0 / v for v in circuit.time_rates() if v > 0]
     if not ideal and bench.actuator.model != "gain":
         fastest.append(bench.actuator.tau)
@@ -299,6 +308,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         dt=step, n_steps=n_steps, stride=stride,
         x0=np.array(scenario.initial.vector(), dtype=np.float64),
         plant=np.array([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c, plant.d / 2]),
+        plant_spread=np.array([spread.get(k, 0.0) for k in SPREAD_ORDER]),
         limit_switches=bool(bench.track.limit_switches),
         sensor_state=circuit.sensor_state, sensor_gain=circuit.sensor_gain,
         sensor_noise_a=np.array([p[0] for p in s_proc]),
@@ -321,6 +331,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         saturation_V=imp.saturation_V, saturation_clipped=not ideal,
         actuator=act_text, limit_switches=bool(bench.track.limit_switches),
         half_track_m=plant.d / 2,
+        plant_spread={k: v for k, v in spread.items() if v},
     )
     return cfg, settings
 

@@ -75,3 +75,24 @@ def test_spice_without_ngspice_writes_deck_and_exits_3(tmp_path):
                        capture_output=True, text=True, cwd=ROOT, env={"PATH": env_path, "HOME": str(tmp_path)})
     assert r.returncode == 3, r.stderr
     assert "apt-get install ngspice" in r.stderr and (tmp_path / "o" / "patch.cir").exists()
+
+
+def test_parameter_spread_monte_carlo():
+    from patchgen.machine import load_machine
+    from patchgen.scenario import load_scenario
+    from patchgen.simulate import simulate
+
+    d, m = design_from_path(design_path("bench-recommended"))
+    net = build_patch(d, m)
+    plant, bench = plant_params(d.spec), load_bench("uw-1991")
+    sc = load_scenario(ROOT / "sims" / "offset-10deg.toml")
+    base = simulate(net, plant, bench, m, sc, runs=8, keep_history=False)
+    zero = simulate(net, plant, bench, m, sc, runs=8, keep_history=False, spread={"M": 0.0})
+    wide = simulate(net, plant, bench, m, sc, runs=8, keep_history=False, spread={"M": 0.3, "l": 0.3})
+    again = simulate(net, plant, bench, m, sc, runs=8, keep_history=False, spread={"M": 0.3, "l": 0.3})
+    thetas = lambda r: [x.max_abs_theta_deg for x in r.runs]  # noqa: E731
+    assert thetas(zero) == thetas(base)  # no spread: the very same runs
+    assert thetas(wide) == thetas(again)  # same seed, same plants drawn
+    assert len(set(round(v, 6) for v in thetas(wide))) > 1 and thetas(wide) != thetas(base)
+    assert wide.settings.plant_spread == {"M": 0.3, "l": 0.3}
+    assert load_machine("gp6").id == m.id

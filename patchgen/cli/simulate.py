@@ -18,22 +18,24 @@ from ..outputs import write_files
 from ..patch import build_patch
 from ..scenario import load_scenario
 from ..simulate import SimResult, simulate, write_outputs
+from ..sweep import parse_by, parse_vary
 from . import cli
 from .design import design_from_path
 
 
 def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal, keep_history=True,
-                      quiet=False) -> SimResult:
+                      quiet=False, spread=None) -> SimResult:
     """simulate() with a progress bar when there is more than one run."""
     if runs <= 1 or quiet:
         return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
-                        keep_history=keep_history)
+                        keep_history=keep_history, spread=spread)
     cols = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
             TimeElapsedColumn())
     with Progress(*cols, console=Console(stderr=True), transient=True) as prog:
         task = prog.add_task(f"{scenario.name}: Monte Carlo", total=runs)
         return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
-                        keep_history=keep_history, progress=lambda done: prog.update(task, completed=done))
+                        keep_history=keep_history, spread=spread,
+                        progress=lambda done: prog.update(task, completed=done))
 
 
 def rendered_outputs(result: SimResult) -> dict[str, bytes]:
@@ -92,16 +94,24 @@ def _p(d, key: str) -> str:
               help="Monte Carlo runs over noise seeds.")
 @click.option("--ideal", is_flag=True, help="Every imperfection off (noise, drift, saturation, actuator lag "
               "and dead zone): the patch as the design imagines it.")
+@click.option("--spread", "spread_text", default=None, metavar="PCT",
+              help="Monte Carlo over the plant too: each run draws M, m, l, b_VF, c uniformly within this "
+              "fraction of the spec's values (e.g. 10%).")
+@click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters --spread draws.")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
-def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, as_json, force) -> None:
+def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, as_json, force) -> None:
     """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
+    spread = None
+    if spread_text is not None:
+        frac = parse_by(spread_text, "--spread")
+        spread = {name: frac for name in parse_vary(vary)}
     d, machine = design_from_path(spec)
     scenario = load_scenario(scenario_path)
     bench = load_bench(d.spec.bench, d.spec.path)
     net = build_patch(d, machine)
     result = run_with_progress(net, plant_params(d.spec), bench, machine, scenario, seed=seed, runs=runs,
-                               ideal=ideal, quiet=as_json)
+                               ideal=ideal, quiet=as_json, spread=spread)
     files = rendered_outputs(result)
     files["netlist.json"] = net.to_json().encode()
     written = write_files(out_dir, files, force=force)

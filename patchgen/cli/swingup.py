@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import asdict
 import tempfile
 from pathlib import Path
 
@@ -17,6 +18,7 @@ from ..outputs import write_files
 from ..patch import build_patch
 from ..sheet import SheetSection
 from ..swingup import STRATEGIES
+from ..swingup_run import compare_strategies
 from ..swingup_output import compact_schedule_rows, patch_sheet_rows, write_outputs
 from . import cli
 from .design import design_from_path
@@ -35,9 +37,11 @@ from .patch import patch_files
 @click.option("--hold", "hold_s", type=click.FloatRange(min=0.1), default=30.0, show_default=True,
               help="Seconds the patched controller must hold after the hand-off.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Noise seed of the hold.")
+@click.option("--compare", is_flag=True, help="Also compare the three strategies (time to the zone, cart "
+              "excursion, success on plants off by +/-10%); takes about a minute.")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
-def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, as_json, force) -> None:
+def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, as_json, force) -> None:
     """Pump SPEC's pendulum up from hanging at rest, hand it to the patched controller when the state
     enters the zone of the linear design, and hold it on the bench (actuator lag and dead zone,
     noise, drift)."""
@@ -66,6 +70,12 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, as_json, for
         for path in plot_manoeuvre(m, Path(tmp) / "manoeuvre", f"{d.spec.name}: {strategy} pump-up, "
                                    f"hand-off at {p.handoff_time or float('nan'):.2f} s, patched hold"):
             files[path.name] = path.read_bytes()
+    comparison = None
+    if compare:
+        with Console(stderr=True).status("comparing the three strategies on the nominal and +/-10% plants"):
+            comparison = compare_strategies(plant, F, d.K[:, :4], m.zone)
+        summary["comparison"] = [{k: v.item() if hasattr(v, "item") else v for k, v in asdict(r).items()}
+                                 for r in comparison]
     files["manoeuvre.json"] = json.dumps(summary, indent=2, sort_keys=True) + "\n"
     written = write_files(out_dir, files, force=force)
     if as_json:
@@ -87,4 +97,19 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, as_json, for
                       f"max |s| {h.max_abs_s_m:.3f} m)" + ("[/green]" if m.held else "[/red]"))
     else:
         console.print("[red]the hand-off zone was not reached[/red]")
+    if comparison:
+        c = Table(title=f"Strategies compared ({F:g} N, zone of the patched controller; success on the "
+                  "10 plants with one parameter off by +/-10%)", title_justify="left")
+        for col in ("strategy", "time to zone (s)", "max |s| (m)", "E/E0 at hand-off", "held (state feedback)",
+                    "robust", "worst time (s)"):
+            c.add_column(col, justify="left" if col == "strategy" else "right")
+        for r in comparison:
+            c.add_row(r.strategy, _num(r.time_to_zone_s, "{:.3f}"), f"{r.max_abs_s_m:.3f}",
+                      _num(r.energy_ratio, "{:.3f}"), "yes" if r.held else "no",
+                      f"{r.robust_reached}/{r.robust_total}", _num(r.worst_time_s, "{:.2f}"))
+        console.print(c)
     console.print("wrote " + ", ".join(str(x) for x in written))
+
+
+def _num(x, fmt: str) -> str:
+    return "-" if x is None else fmt.format(x)

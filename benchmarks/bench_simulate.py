@@ -1,6 +1,6 @@
 """Speed and accuracy of patchgen's bench simulator (issue 4). A script, not a timed test.
 
-1. One 60 s run of the section 5.3 patch (tests/fixtures/ch5-netlist-example.json) in ideal mode,
+1. One 60 s run of the section 5.3 patch (tests/fixtures/thesis-ch5.netlist.json) in ideal mode,
    released from 10 deg, through patchgen.simulate and through python-control's
    input_output_response on the same closed loop: the nonlinear plant (patchgen.plant) and the
    same circuit, evaluated in Python from the same compiled netlist arrays. A python-control run
@@ -41,7 +41,7 @@ from patchgen.plant import PlantParams, nonlinear_rhs
 from patchgen.scenario import Scenario, load_scenario
 from patchgen.simulate import simulate
 
-NETLIST = ROOT / "tests/fixtures/ch5-netlist-example.json"
+NETLIST = ROOT / "tests/fixtures/thesis-ch5.netlist.json"
 # thesis table B.1 (the design spec, designs/thesis-ch5.toml, will carry these)
 PLANT = PlantParams(M=3.552, m=0.324, l=0.429, g=9.807, b_VF=2.5775, c=0.001, d=1.090)
 DURATION_S = 60.0

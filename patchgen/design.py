@@ -6,7 +6,6 @@ plant and actuator states; integral states come from integrators of the measured
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -315,6 +314,3 @@ def _sort(v):
     v = np.asarray(v, dtype=complex)
     return v[np.lexsort((v.imag, v.real))]
 
-
-def db(x: float | None) -> float | None:
-    return None if x is None else 20 * math.log10(x)

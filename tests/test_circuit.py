@@ -17,7 +17,7 @@ GP6 = load_machine("gp6")
 
 @pytest.fixture()
 def data() -> dict:
-    return read_netlist(ROOT / "tests/fixtures/ch5-netlist-example.json").model_dump(by_alias=True)
+    return read_netlist(ROOT / "tests/fixtures/thesis-ch5.netlist.json").model_dump(by_alias=True)
 
 
 def _amp(data: dict, amp_id: str) -> dict:

@@ -9,7 +9,7 @@ from pathlib import Path
 from patchgen.diagram import quantity_label, wiring_svg
 from patchgen.netlist import Netlist, read_netlist
 
-FIXTURE = Path(__file__).parent / "fixtures" / "ch5-netlist-example.json"
+FIXTURE = Path(__file__).parent / "fixtures" / "thesis-ch5.netlist.json"
 SVG_NS = "{http://www.w3.org/2000/svg}"
 
 

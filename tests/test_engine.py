@@ -56,7 +56,7 @@ def test_noise_process_keeps_the_low_frequency_density(dt):
 def test_halving_the_default_step_moves_theta_less_than_1e_4_rad_rms(name, ideal):
     """Issue 4's accuracy rule, measured with noise off (a noise realisation depends on the
     step); the bench runs include dead zone, lag, clipping and the limit switches."""
-    net = read_netlist(ROOT / "tests/fixtures/ch5-netlist-example.json")
+    net = read_netlist(ROOT / "tests/fixtures/thesis-ch5.netlist.json")
     bench, gp6 = load_bench("uw-1991"), load_machine("gp6")
     base = load_scenario(ROOT / "sims" / f"{name}.toml").model_dump()
     _, settings = engine_config(compile_circuit(net, gp6), PLANT, bench, gp6,

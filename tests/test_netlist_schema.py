@@ -20,3 +20,9 @@ def test_written_netlist_is_deterministic_and_reads_back():
     data = json.loads(a)
     assert data["schema"] == SCHEMA_ID
     assert Netlist.model_validate_json(a).to_json() == a
+
+
+def test_golden_ch5_netlist():
+    # the fixture other tests read is exactly what patchgen writes for the section 5.3 design
+    d, m = design_from_path(design_path("thesis-ch5"))
+    assert build_patch(d, m).to_json() == (ROOT / "tests" / "fixtures" / "thesis-ch5.netlist.json").read_text()

@@ -11,7 +11,7 @@ from patchgen.diagram import wiring_svg
 from patchgen.netlist import read_netlist, wire_list
 from patchgen.sheet import SheetSection, SheetSummary, render_sheet
 
-FIXTURE = Path(__file__).parent / "fixtures" / "ch5-netlist-example.json"
+FIXTURE = Path(__file__).parent / "fixtures" / "thesis-ch5.netlist.json"
 MM = 72 / 25.4
 
 # Section 5.3 design as conventions.md states it (K for [s, theta, s_dot, theta_dot, int_theta]).

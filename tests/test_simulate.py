@@ -27,7 +27,7 @@ GP6 = load_machine("gp6")
 
 @pytest.fixture(scope="module")
 def ch5() -> Netlist:
-    return read_netlist(ROOT / "tests/fixtures/ch5-netlist-example.json")
+    return read_netlist(ROOT / "tests/fixtures/thesis-ch5.netlist.json")
 
 
 def _linear_closed_loop(net: Netlist) -> np.ndarray:

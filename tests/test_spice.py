@@ -29,7 +29,7 @@ from patchgen.spice import (
     spice_deck,
 )
 
-FIXTURE = Path(__file__).parent / "fixtures" / "ch5-netlist-example.json"
+FIXTURE = Path(__file__).parent / "fixtures" / "thesis-ch5.netlist.json"
 # Table B.1 of the thesis.
 PLANT = PlantParams(M=3.552, m=0.324, l=0.429, g=9.807, b_VF=2.5775, c=0.001, d=1.090)
 # The 10 deg offset scenario: 10 s, released at rest.
@@ -189,7 +189,7 @@ def test_deck_has_every_amplifier_pot_and_profile_value(net, gp6, bench):
         assert any(ln.startswith(f"R_{p}_lo ") for ln in lines)
     # A6's x10 inputs use the profile's x10 resistor, A7's the x1 one; A1 has its 1 uF capacitor.
     assert "R_a6_x10a pot_p2_w a6_sj 100000.0" in lines
-    assert "R_a7_x1b pot_p4_w a7_sj 1000000.0" in lines
+    assert "R_a7_x1a pot_p4_w a7_sj 1000000.0" in lines
     assert "C_a1_f a1_sj a1_out 1e-06" in lines
     # Differentiator A5: 1 uF input capacitor with a series resistor for the 0.01 s roll-off.
     assert "C_a5_x1a sens_theta a5_x1a_m 1e-06" in lines

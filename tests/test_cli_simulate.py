@@ -96,3 +96,11 @@ def test_parameter_spread_monte_carlo():
     assert len(set(round(v, 6) for v in thetas(wide))) > 1 and thetas(wide) != thetas(base)
     assert wide.settings.plant_spread == {"M": 0.3, "l": 0.3}
     assert load_machine("gp6").id == m.id
+
+
+def test_patch_json(tmp_path):
+    r = run("patch", "designs/thesis-ch5.toml", "-o", str(tmp_path / "o"), "--json", "--no-predict")
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert {p["signal"] for p in d["pots"] if p["weight"] == 10} == {"theta", "s_dot"}
+    assert d["machine"] == "gp6" and d["units"] == 1

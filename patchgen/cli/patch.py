@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import click
 from rich.console import Console
 
@@ -10,7 +12,7 @@ from ..diagram import wiring_svg
 from ..model import plant_params
 from ..outputs import write_files
 from ..patch import build_patch
-from ..pottable import pot_table, pots_csv
+from ..pottable import pot_rows, pot_table, pots_csv
 from ..prediction import diagnosis_note, predict, prediction_rows
 from ..sheet import SheetSection, SheetSummary, render_sheet
 from . import cli
@@ -72,13 +74,21 @@ def patch_files(d, machine, net, extra_sections=(), runs_hold: int = 20, predict
 @click.option("--runs", "runs_hold", default=20, show_default=True, type=click.IntRange(1, 10000),
               help="Noise seeds for the 120 s hold in the sheet's bench prediction.")
 @click.option("--no-predict", is_flag=True, help="Leave the bench prediction off the sheet (faster).")
-def patch_cmd(spec: str, out_dir: str, force: bool, runs_hold: int, no_predict: bool) -> None:
+@click.option("--json", "as_json", is_flag=True, help="Print the pot table, amplifiers and notes as JSON.")
+def patch_cmd(spec: str, out_dir: str, force: bool, runs_hold: int, no_predict: bool, as_json: bool) -> None:
     """Scale SPEC's gains, allocate the machine and write the patch: netlist.json, pots.csv,
     patch-sheet.html, patch-sheet.md (with the bench prediction) and wiring.svg."""
     d, machine = design_from_path(spec)
     net = build_patch(d, machine)
     written = write_files(out_dir, patch_files(d, machine, net, runs_hold=runs_hold,
                                                predict_bench=not no_predict), force=force)
+    if as_json:
+        click.echo(json.dumps({"design": net.design, "machine": net.machine, "units": net.units,
+                               "pots": pot_rows(net), "amplifiers": [{"id": a.id, "role": a.role,
+                                                                      "carries": a.carries.model_dump()}
+                                                                     for a in net.amplifiers],
+                               "notes": net.notes, "written": [str(p) for p in written]}, indent=2, sort_keys=True))
+        return
     console = Console()
     console.print(pot_table(net))
     for n in net.notes:

@@ -116,7 +116,10 @@ def sheet_context(net: Netlist, summary: SheetSummary) -> dict:
     margins = [{"loop": loop, "figures": [(name, _fmt(v)) for name, v in figs.items()]}
                for loop, figs in summary.margins.items()]
 
+    # the diagram gets the room the extra sections leave on two printed pages
+    diagram_mm = 96 if len(summary.sections) <= 1 else 68
     return {
+        "diagram_mm": diagram_mm,
         "net": net,
         "summary": summary,
         "title": f"Patch sheet: {summary.design or net.design}",

@@ -23,9 +23,9 @@ candidates whose loop is unstable, or whose phase margin at the plant input is b
 MIN_PM_DEG, are skipped: the variance is linear and blind to the dead zone and the force limit,
 which in simulation turn a loop with a thin phase margin into a limit cycle that walks the cart
 into the switches (a 0.03 s roll-off with 18 degrees trips in every seed where 0.003 s with 32
-degrees holds in every seed), so the rule minimises the error among robust candidates only. K_w (w_hat - w) weighs each estimated state by
-its gain, so for a differentiator the rule is the theta_dot error variance (plus terms that do
-not depend on the roll-off).
+degrees holds in every seed), so the rule minimises the error among robust candidates only.
+K_w (w_hat - w) weighs each estimated state by its gain, so for a differentiator the rule is
+the theta_dot error variance (plus terms that do not depend on the roll-off).
 """
 
 from __future__ import annotations

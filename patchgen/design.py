@@ -122,7 +122,8 @@ def kalman_gain(spec: DesignSpec, model: LinearModel, rho: float) -> np.ndarray:
     try:
         P = sla.solve_continuous_are(Ae.T, Ce.T, Qn, V)
     except (np.linalg.LinAlgError, ValueError) as exc:
-        raise spec.error("estimator", f"the estimator Riccati equation has no solution at rho = {rho:g} ({exc})") from None
+        raise spec.error("estimator",
+                         f"the estimator Riccati equation has no solution at rho = {rho:g} ({exc})") from None
     L = P @ Ce.T @ np.linalg.inv(V)
     if not np.all(np.isfinite(L)) or np.max(np.linalg.eigvals(Ae - L @ Ce).real) >= 0 or L.shape[0] != n:
         raise spec.error("estimator", f"the Kalman filter is not stable at rho = {rho:g}")
@@ -180,7 +181,7 @@ def differentiator_controller(model: LinearModel, K: np.ndarray, rolloff: float)
     kd = K[0, model.index("theta_dot")]
     Dc[0, it] -= kd / rolloff
     Cc[0, 0] += kd / rolloff
-    for r, nm in enumerate(inames):
+    for r in range(len(inames)):
         j = 1 + r
         Ac[j, 1:1 + len(inames)] = Ai[r]
         Bc[j] = Ei[r]

@@ -489,7 +489,7 @@ def wiring_svg(netlist: Netlist) -> str:
                 x_end = xo - 0.07
             wire(k, (xt, y), (x_end, y))
 
-    for name, a, b in wires:
+    for _, a, b in wires:
         d.add(Line().at(a).to(b).linewidth(WIRE_LW))
     for pt in _junctions(wires):
         d.add(_Dot().at(pt))

@@ -73,7 +73,7 @@ class MachineProfile(_Strict):
     components: Components
     imperfections: Imperfections
 
-    def slaved(self, units: int) -> "MachineProfile":
+    def slaved(self, units: int) -> MachineProfile:
         """``units`` machines slaved together as one: amplifiers U1.A1 ... U2.A8, pots times units."""
         if units == 1:
             return self

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from .allocation import allocate
-from .errors import ResourceError
 from .design import Design
+from .errors import ResourceError
 from .machine import MachineProfile
 from .netlist import Netlist
 from .realization import realize

@@ -198,7 +198,8 @@ def check_spec(spec: DesignSpec) -> None:
             Q = np.array(w.Q, dtype=float)
             n = len(states)
             if Q.shape != (n, n):
-                raise err("weights.Q", f"must be {n}x{n} for states {', '.join(states)} (got {Q.shape[0]}x{Q.shape[1] if Q.ndim > 1 else 0})")
+                cols = Q.shape[1] if Q.ndim > 1 else 0
+                raise err("weights.Q", f"must be {n}x{n} for states {', '.join(states)} (got {Q.shape[0]}x{cols})")
             if not np.allclose(Q, Q.T, atol=1e-12 * max(1.0, np.abs(Q).max())):
                 raise err("weights.Q", "must be symmetric")
             if np.linalg.eigvalsh(Q).min() < -1e-10 * max(1.0, np.abs(Q).max()):

@@ -193,9 +193,10 @@ def _sensor_constant(bench: BenchProfile, sensor_id: str) -> float:
 def _noise_source(d: _Deck, name: str, plus: str, minus: str, rms: float, bandwidth_Hz: float,
                   duration_s: float) -> None:
     """White noise of the given rms, sampled at twice its bandwidth and joined linearly, as a
-    voltage source ``name`` (an E element) in series between ``minus`` and ``plus``. The samples come from the deck's seeded
-    generator (ngspice's TRNOISE cannot be seeded reproducibly in batch mode) and are played from
-    the noise table by one XSPICE filesource (a PWL source of this length is quadratically slow)."""
+    voltage source ``name`` (an E element) in series between ``minus`` and ``plus``. The samples
+    come from the deck's seeded generator (ngspice's TRNOISE cannot be seeded reproducibly in
+    batch mode) and are played from the noise table by one XSPICE filesource (a PWL source of
+    this length is quadratically slow)."""
     dt = 0.5 / bandwidth_Hz
     n = int(math.ceil(duration_s / dt)) + 1
     d.noise.append((f"nz_{len(d.noise)}", dt, d.rng.normal(0.0, rms, n)))

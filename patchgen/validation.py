@@ -46,7 +46,8 @@ def validate(model: type[M], data: Any, source: str, prefix: str = "") -> M:
         err = exc.errors()[0]
         loc = tuple(p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-")))
         # pydantic puts the union member or validator name in loc; keep the field names only
-        loc = tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p in ("float", "int", "str", "bool", "list", "dict"))))
+        type_names = ("float", "int", "str", "bool", "list", "dict")
+        loc = tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p in type_names)))
         where = field_path(loc)
         if prefix:
             where = f"{prefix}.{where}" if where else prefix

@@ -83,8 +83,8 @@ def test_bad_spec_one_line_exit_2(tmp_path: Path, edit, field, words):
 
 
 def test_matrix_Q_must_be_psd(tmp_path: Path):
-    t = BASE.replace("Q = { s = 25.0, theta = 100.0, s_dot = 25.0, theta_dot = 100.0, int_s = 25.0, int_theta = 100.0 }",
-                     "Q = [[1,0,0,0,0,0],[0,1,0,0,0,0],[0,0,1,0,0,0],[0,0,0,1,0,0],[0,0,0,0,1,2],[0,0,0,0,2,1]]")
+    diag = "Q = { s = 25.0, theta = 100.0, s_dot = 25.0, theta_dot = 100.0, int_s = 25.0, int_theta = 100.0 }"
+    t = BASE.replace(diag, "Q = [[1,0,0,0,0,0],[0,1,0,0,0,0],[0,0,1,0,0,0],[0,0,0,1,0,0],[0,0,0,0,1,2],[0,0,0,0,2,1]]")
     p = tmp_path / "q.toml"
     p.write_text(t)
     r = run("design", str(p))

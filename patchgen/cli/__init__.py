@@ -10,7 +10,6 @@ import click
 from .. import __version__
 from ..errors import InputError
 
-
 COMMANDS = ("design", "patch", "simulate", "spice", "recommend", "swingup", "sweep")
 
 

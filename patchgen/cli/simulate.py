@@ -51,7 +51,7 @@ def summary_table(result: SimResult) -> Table:
     t = Table(title=f"{result.design} on the {result.bench} bench, scenario {result.scenario.name}"
               + (" (ideal)" if result.ideal else ""), title_justify="left")
     t.add_column("figure")
-    t.add_column("run 0 (seed %d)" % result.seed, justify="right")
+    t.add_column(f"run 0 (seed {result.seed})", justify="right")
     if d.runs > 1:
         t.add_column(f"{d.runs} runs", justify="right")
 

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import json
-from dataclasses import asdict
 import tempfile
+from dataclasses import asdict
 from pathlib import Path
 
 import click
@@ -18,8 +18,8 @@ from ..outputs import write_files
 from ..patch import build_patch
 from ..sheet import SheetSection
 from ..swingup import STRATEGIES
-from ..swingup_run import compare_strategies
 from ..swingup_output import compact_schedule_rows, patch_sheet_rows, write_outputs
+from ..swingup_run import compare_strategies
 from . import cli
 from .design import design_from_path
 from .patch import patch_files

@@ -20,7 +20,8 @@ from .plant import PlantParams
 from .scenario import InitialState, Scenario
 from .simulate import SimResult, simulate
 from .swingup import SwingUpResult
-from .swingup_run import swing_up
+from .schedule import SensitivityRow, schedule_sensitivity
+from .swingup_run import optimised_schedule, swing_up
 
 RECOVERY_S = 5.0  # a start counts as recovered if the patch holds it this long and brings theta home
 HOME_DEG = 3.0
@@ -32,6 +33,7 @@ class Manoeuvre:
     hold: SimResult | None
     hold_s: float
     zone: Zone | None = None
+    sensitivity: list[SensitivityRow] | None = None  # the open-loop schedule on plants off by 10%
 
     @property
     def held(self) -> bool:
@@ -66,11 +68,17 @@ def manoeuvre(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Ma
     """Pump up with ``strategy`` until the state enters the patched controller's zone, then hold
     with the patched controller for ``hold_s`` seconds on the bench."""
     zone = patched_zone(net, plant, bench, machine, K4, force_limit, seed=seed)
-    pump = swing_up(plant, force_limit, strategy, K4, zone, hold_s=0.0)
+    sensitivity = None
+    if strategy == "schedule":
+        sched = optimised_schedule(plant, force_limit, zone)
+        pump = swing_up(plant, force_limit, strategy, K4, zone, schedule=sched, hold_s=0.0)
+        sensitivity = schedule_sensitivity(plant, sched.schedule, zone, force_limit)
+    else:
+        pump = swing_up(plant, force_limit, strategy, K4, zone, hold_s=0.0)
     if not pump.reached:
-        return Manoeuvre(pump, None, hold_s, zone)
+        return Manoeuvre(pump, None, hold_s, zone, sensitivity)
     sc = _start(pump.handoff_state, hold_s, seed, "hold-after-pump-up")
-    return Manoeuvre(pump, simulate(net, plant, bench, machine, sc, ideal=ideal), hold_s, zone)
+    return Manoeuvre(pump, simulate(net, plant, bench, machine, sc, ideal=ideal), hold_s, zone, sensitivity)
 
 
 def plot_manoeuvre(m: Manoeuvre, stem: Path, title: str) -> list[Path]:

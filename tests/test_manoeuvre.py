@@ -42,3 +42,15 @@ def test_swingup_cli_writes_schedule_on_the_sheet(tmp_path):
     assert "Pump-up schedule" in sheet and "hand-off" in sheet
     for f in ("manoeuvre.png", "manoeuvre.svg", "swingup-switching.csv", "netlist.json"):
         assert (tmp_path / f).exists()
+
+
+def test_open_loop_schedule_and_its_sensitivity():
+    d, m = design_from_path(design_path("bench-recommended"))
+    net = build_patch(d, m)
+    plant = plant_params(d.spec)
+    man = manoeuvre(net, plant, load_bench("uw-1991"), m, d.K[:, :4], "schedule", 15.0, hold_s=5.0)
+    assert man.pump.reached and man.pump.handoff_time < 7.0 and man.held
+    rows = man.sensitivity
+    assert [(r.parameter, r.factor) for r in rows][:2] == [("M", 0.9), ("M", 1.1)] and len(rows) == 10
+    # an open-loop schedule is fragile: some 10% error makes it miss the zone (thesis 3.6)
+    assert not all(r.reached for r in rows)

@@ -70,6 +70,9 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, as_
         for path in plot_manoeuvre(m, Path(tmp) / "manoeuvre", f"{d.spec.name}: {strategy} pump-up, "
                                    f"hand-off at {p.handoff_time or float('nan'):.2f} s, patched hold"):
             files[path.name] = path.read_bytes()
+    if m.sensitivity is not None:
+        summary["schedule_sensitivity"] = [{k: v.item() if hasattr(v, "item") else v for k, v in asdict(r).items()}
+                                           for r in m.sensitivity]
     comparison = None
     if compare:
         with Console(stderr=True).status("comparing the three strategies on the nominal and +/-10% plants"):
@@ -97,6 +100,15 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, as_
                       f"max |s| {h.max_abs_s_m:.3f} m)" + ("[/green]" if m.held else "[/red]"))
     else:
         console.print("[red]the hand-off zone was not reached[/red]")
+    if m.sensitivity:
+        s = Table(title="The open-loop schedule replayed on plants with one parameter off by 10%",
+                  title_justify="left")
+        for col in ("parameter", "factor", "reaches the zone", "at (s)", "max |s| (m)", "on the track"):
+            s.add_column(col, justify="left" if col == "parameter" else "right")
+        for r in m.sensitivity:
+            s.add_row(r.parameter, f"{r.factor:.2f}", "yes" if r.reached else "no", _num(r.time_to_zone_s, "{:.3f}"),
+                      f"{r.max_abs_s_m:.3f}", "yes" if r.on_track else "no")
+        console.print(s)
     if comparison:
         c = Table(title=f"Strategies compared ({F:g} N, zone of the patched controller; success on the "
                   "10 plants with one parameter off by +/-10%)", title_justify="left")

@@ -18,9 +18,9 @@ from .machine import MachineProfile
 from .netlist import Netlist
 from .plant import PlantParams
 from .scenario import InitialState, Scenario
+from .schedule import SensitivityRow, schedule_sensitivity
 from .simulate import SimResult, simulate
 from .swingup import SwingUpResult
-from .schedule import SensitivityRow, schedule_sensitivity
 from .swingup_run import optimised_schedule, swing_up
 
 RECOVERY_S = 5.0  # a start counts as recovered if the patch holds it this long and brings theta home

@@ -7,15 +7,12 @@ from __future__ import annotations
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
-import numpy as np
-
-from .design import Design, design
+from .design import design
 from .errors import InputError
 from .machine import MachineProfile
 from .margins import Margins
 from .model import plant_params
 from .patch import build_patch
-from .plant import PlantParams
 from .spec import DesignSpec
 
 VARIABLE = ("M", "m", "l", "b_VF", "c", "g")
@@ -114,20 +111,3 @@ def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float
         return [_row(j) for j in jobs]
     with ProcessPoolExecutor(max_workers=workers or None) as ex:
         return list(ex.map(_row, jobs))
-
-
-def perturbed_plant(spec: DesignSpec, factors: dict[str, float]) -> PlantParams:
-    return plant_params(spec).scaled(**factors)
-
-
-def design_for(spec: DesignSpec, factors: dict[str, float], rolloff: float) -> Design:
-    return design(spec, plant=perturbed_plant(spec, factors), default_rolloff_s=rolloff)
-
-
-def gain_spread(rows: list[SweepRow]) -> np.ndarray:
-    """Largest relative change of each gain over the rows, against the nominal row."""
-    K0 = np.array(rows[0].K)
-    Ks = np.array([r.K for r in rows])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rel = np.abs(Ks - K0) / np.where(np.abs(K0) > 1e-9, np.abs(K0), np.nan)
-    return np.nanmax(rel, axis=0)

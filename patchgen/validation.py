@@ -72,4 +72,6 @@ def load_profile(model: type[M], folder: Path, name_or_path: str, kind: str, sou
         if not path.exists():
             known = ", ".join(sorted(p.stem for p in folder.glob("*.toml")))
             raise InputError(source or name_or_path, field, f"unknown {kind} {name_or_path!r} (known: {known})")
+    elif not path.is_file():
+        raise InputError(source or name_or_path, field, f"no {kind} profile file {name_or_path!r}")
     return validate(model, read_toml(path), str(path))

@@ -14,14 +14,15 @@ from patchgen.sheet import SheetSection, SheetSummary, render_sheet
 FIXTURE = Path(__file__).parent / "fixtures" / "thesis-ch5.netlist.json"
 MM = 72 / 25.4
 
-# Section 5.3 design as conventions.md states it (K for [s, theta, s_dot, theta_dot, int_theta]).
+# The section 5.3 design (designs/thesis-ch5.toml): K for [s, theta, s_dot, theta_dot, int_theta],
+# its closed-loop poles and LQR margins as `patchgen design` gives them.
 SUMMARY = SheetSummary(
     design="thesis-ch5",
     description="LQR of section 5.3 <as wired>",
     states=["s", "theta", "s_dot", "theta_dot", "int_theta"],
     K=[-15.8114, -156.7625, -22.5763, -35.1574, -3.2248e-05],
-    poles=[-22.2917, complex(-1.7309, 1.2205), complex(-1.7309, -1.2205), -0.00001],
-    margins={"plant input": {"lower GM": "0.2757 (−11.19 dB)", "PM (deg)": 79.12}},
+    poles=[-12.2835, -2.6682, complex(-1.2542, 1.2377), complex(-1.2542, -1.2377), -0.00001],
+    margins={"plant input": {"lower GM": "0.3815 (−8.37 dB)", "PM (deg)": 71.53}},
     estimator="none: theta_dot from a differentiator",
     sections=[SheetSection("Predicted on the bench", ["Quantity", "Value"],
                            [["closed-loop pole with the 0.2 s actuator lag", "+0.32"]])],

@@ -23,7 +23,9 @@ import numpy as np
 from .design import Design
 from .machine import MachineProfile
 
-SENSOR_UNITS = {"s": "m", "theta": "rad", "s_dot": "m/s"}
+STATE_UNITS = {"s": "m", "theta": "rad", "s_dot": "m/s", "theta_dot": "rad/s", "int_s": "m s",
+               "int_theta": "rad s", "actuator": "N"}
+SENSOR_UNITS = {k: STATE_UNITS[k] for k in ("s", "theta", "s_dot")}
 SENSOR_LABELS = {"s": "cart position pot", "theta": "pendulum angle pot", "s_dot": "motor tachometer"}
 
 
@@ -75,8 +77,6 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
     e = spec.estimator.kind
     blocks: list[Block] = []
     scale: dict[str, float] = dict(ks)  # volts per unit of each state signal on the machine
-    units = {"theta_dot": "rad/s", "int_s": "m s", "int_theta": "rad s", "actuator": "N"}
-    notes: list[str] = []
     states = design.states
     sc = spec.actuator.state_scale
     if e == "kalman":
@@ -94,14 +94,9 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
                             "theta_dot from theta (practical differentiator)" if e == "differentiator" else
                             f"theta_dot from theta (differentiator, roll-off {roll:g} s chosen from the noise)",
                             T_d_s=scale["theta_dot"] / ks["theta"], rolloff_s=roll))
-    for name, src in (("int_s", "s"), ("int_theta", "theta")):
-        if name in states:
-            scale[name] = ks[src]  # volts per (unit s): integrating the sensor voltage with gain 1
-            blocks.append(Block(name, "integrate", (Term(src, T),), scale[name],
-                                units[name], f"integral of {src}"))
-            leak = getattr(spec.integrators, f"{name}_leak")
-            if leak:
-                notes.append(f"{name}: the design's leak of {leak:g} 1/s is not patched (a pure integrator)")
+    ints, int_scale, notes = _integral_blocks(design, ks, T)
+    blocks += ints
+    scale.update(int_scale)
     if "actuator" in states:
         # model of the actuator driven by u_c: x_a' = -x_a/tau + u/(tau sc); voltage sc/K_U per unit
         scale["actuator"] = sc / KU
@@ -116,6 +111,20 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
     return Realization(spec.name, ks, tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
 
 
+def _integral_blocks(design: Design, ks: dict[str, float], T: float):
+    """The integral states as integrators of the sensor voltages (gain 1: volts per unit s equal the
+    sensor's), their scales, and a note for each design leak the pure integrator leaves out."""
+    blocks, scale, notes = [], {}, []
+    for name, src in (("int_s", "s"), ("int_theta", "theta")):
+        if name in design.states:
+            scale[name] = ks[src]
+            blocks.append(Block(name, "integrate", (Term(src, T),), ks[src], STATE_UNITS[name], f"integral of {src}"))
+            leak = getattr(design.spec.integrators, f"{name}_leak")
+            if leak:
+                notes.append(f"{name}: the design's leak of {leak:g} 1/s is not patched (a pure integrator)")
+    return blocks, scale, notes
+
+
 def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
     """Kalman estimator states on integrators: xhat' = A xhat + B u + L (y - C xhat), in volts."""
     spec = design.spec
@@ -126,7 +135,6 @@ def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
     sc = spec.actuator.state_scale
     sv = {"s": ks["s"], "theta": ks["theta"], "s_dot": ks["s_dot"], "theta_dot": spec.theta_dot_scale(),
           "actuator": sc / KU}
-    units = {"s": "m", "theta": "rad", "s_dot": "m/s", "theta_dot": "rad/s", "actuator": "N"}
     S = np.diag([sv[s] for s in est])
     Sy = np.diag([ks[m] for m in model.measured])
     Av = S @ (Ae - L @ Ce) @ np.linalg.inv(S)
@@ -138,16 +146,15 @@ def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
         terms += [Term(m, T * Lv[i, j]) for j, m in enumerate(model.measured) if Lv[i, j] != 0]
         if Bv[i] != 0:
             terms.append(Term("u_c", T * Bv[i]))
-        blocks.append(Block(f"xhat_{s}", "integrate", tuple(terms), sv[s], units[s], f"Kalman estimate of {s}"))
+        blocks.append(Block(f"xhat_{s}", "integrate", tuple(terms), sv[s], STATE_UNITS[s], f"Kalman estimate of {s}"))
     scale = {f"xhat_{s}": sv[s] for s in est}
-    for name, src in (("int_s", "s"), ("int_theta", "theta")):
-        if name in model.states:
-            scale[name] = ks[src]
-            blocks.append(Block(name, "integrate", (Term(src, T),), ks[src], "", f"integral of {src}"))
+    ints, int_scale, notes = _integral_blocks(design, ks, T)
+    blocks += ints
+    scale.update(int_scale)
     sig = {s: (f"xhat_{s}" if s in est else s) for s in model.states}
     terms = tuple(Term(sig[s], -float(design.K[0, i]) / (scale[sig[s]] * KU)) for i, s in enumerate(model.states))
     blocks.append(Block("u_c", "sum", terms, 1.0, "V", "control voltage to the servo amplifier"))
-    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution)
+    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
 
 
 def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
@@ -166,7 +173,6 @@ def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
     w = list(obs.unmeasured)
     y = list(model.measured)
     tau = 1.0 / obs.pole
-    units = {"theta_dot": "rad/s", "actuator": "N"}
     alpha: dict[str, float] = {}
     for i in reversed(range(len(w))):
         rates = [abs(obs.F[i, j]) / alpha[w[j]] for j in range(i + 1, len(w))]
@@ -184,14 +190,13 @@ def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
                 terms.append(Term(m, _exact(tau * obs.G[i, k] * alpha[s] / ks[m], top)))
         if obs.H[i] != 0:
             terms.append(Term("u_c", _exact(tau * obs.H[i] * alpha[s] * KU, top)))
-        blocks.append(Block(f"z_{s}", "lag", tuple(terms), alpha[s], units[s],
+        blocks.append(Block(f"z_{s}", "lag", tuple(terms), alpha[s], STATE_UNITS[s],
                             f"reduced observer: {s} estimate minus its sensor part (pole {obs.pole:g} rad/s)",
                             tau_s=tau))
     scale = {f"z_{s}": alpha[s] for s in w}
-    for name, src in (("int_s", "s"), ("int_theta", "theta")):
-        if name in model.states:
-            scale[name] = ks[src]
-            blocks.append(Block(name, "integrate", (Term(src, T),), ks[src], "", f"integral of {src}"))
+    ints, int_scale, notes = _integral_blocks(design, ks, T)
+    blocks += ints
+    scale.update(int_scale)
     Ky = design.K[0, [model.index(m) for m in y]]
     Kw = design.K[0, [model.index(s) for s in w]]
     folded = Ky + Kw @ obs.Lr
@@ -208,12 +213,12 @@ def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
         beta = math.sqrt(abs(Kw[i]) / (KU * ins))
         hterms = [Term(f"z_{s}", beta / alpha[s])]
         hterms += [Term(m, float(obs.Lr[i, k]) * beta / ks[m]) for k, m in enumerate(y) if obs.Lr[i, k] != 0]
-        blocks.append(Block(f"what_{s}", "sum", tuple(hterms), beta, units[s],
+        blocks.append(Block(f"what_{s}", "sum", tuple(hterms), beta, STATE_UNITS[s],
                             f"reduced observer's estimate of {s} (z plus its sensor part)"))
         uterms.append(Term(f"what_{s}", -float(Kw[i]) / (beta * KU)))
     uterms += [Term(n, -design.gain(n) / (scale[n] * KU)) for n in model.states if n.startswith("int_")]
     blocks.append(Block("u_c", "sum", tuple(uterms), 1.0, "V", "control voltage to the servo amplifier"))
-    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution)
+    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
 
 
 def _exact(c: float, top: float) -> float:

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
 from .validation import load_profile
-
-BENCH_DIR = Path(__file__).parent / "benches"
 
 
 class _Strict(BaseModel):
@@ -50,4 +47,4 @@ class BenchProfile(_Strict):
 
 def load_bench(name_or_path: str, source: str = "", field: str = "bench") -> BenchProfile:
     """Load a shipped bench profile by id (e.g. 'uw-1991') or a file by path."""
-    return load_profile(BenchProfile, BENCH_DIR, name_or_path, "bench", source, field)
+    return load_profile(BenchProfile, name_or_path, "bench", source, field)

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
 from .validation import load_profile
-
-PROFILE_DIR = Path(__file__).parent / "machines"
 
 Role = Literal["integrator", "summer", "inverter", "differentiator"]
 
@@ -90,4 +87,4 @@ class MachineProfile(_Strict):
 
 def load_machine(name_or_path: str, source: str = "", field: str = "machine") -> MachineProfile:
     """Load a shipped profile by id (e.g. 'gp6') or a profile file by path."""
-    return load_profile(MachineProfile, PROFILE_DIR, name_or_path, "machine", source, field)
+    return load_profile(MachineProfile, name_or_path, "machine", source, field)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 from .bench import BenchProfile
 from .diagnosis import diagnose
@@ -13,7 +12,6 @@ from .plant import PlantParams
 from .scenario import load_scenario
 from .simulate import simulate
 
-SIMS_DIR = Path(__file__).resolve().parent.parent / "sims"
 STANDARD = ("offset-10deg", "finger-push", "step-cart", "hold-120s")
 
 
@@ -36,7 +34,7 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
     small Monte Carlo over noise seeds, the others as one run at their own seed."""
     out = []
     for name in scenarios:
-        sc = load_scenario(SIMS_DIR / f"{name}.toml")
+        sc = load_scenario(name)
         runs = runs_hold if name == "hold-120s" else 1
         r = simulate(net, plant, bench, machine, sc, runs=runs, keep_history=False)
         d = r.distribution

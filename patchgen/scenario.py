@@ -13,6 +13,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from .resources import resolve
 from .validation import read_toml, validate
 
 
@@ -124,6 +125,7 @@ class Scenario(_Strict):
 
 
 def load_scenario(path: str | Path) -> Scenario:
-    """Read and check a scenario TOML file; its name defaults to the file's stem."""
-    sc = validate(Scenario, read_toml(path), str(path))
-    return sc if sc.name else sc.model_copy(update={"name": Path(path).stem})
+    """Read and check a scenario TOML file, or a shipped scenario by name (``hold-120s``); its name
+    defaults to the file's stem."""
+    sc = validate(Scenario, read_toml(resolve("scenario", path)), str(path))
+    return sc if sc.name else sc.model_copy(update={"name": Path(str(path)).stem})

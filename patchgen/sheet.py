@@ -1,6 +1,6 @@
 """The patch sheet: what a lab needs to wire, set and run a patch, as HTML and Markdown.
 
-Rendered from the templates in the repository's templates/ directory (jinja2). The HTML sheet is
+Rendered from the templates shipped in the package (patchgen/templates, jinja2). The HTML sheet is
 printable on A4 and on Letter alike: its page is the area common to both (210 mm x 279 mm) with
 margins, so nothing is wider than 186 mm or taller than 250 mm. Everything shown is computed from
 the netlist and the design summary, so the same inputs give the same bytes.
@@ -10,14 +10,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import jinja2
 
 from .diagram import dial_decimals, quantity_label, signed_label
 from .netlist import Amplifier, Netlist, Pot, wire_list
-
-TEMPLATE_DIR = Path(__file__).parent.parent / "templates"
 
 
 @dataclass(frozen=True)
@@ -258,7 +255,7 @@ def _inline_svg(svg: str) -> str:
 
 def _env(autoescape: bool) -> jinja2.Environment:
     return jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(TEMPLATE_DIR)),
+        loader=jinja2.PackageLoader("patchgen", "templates"),
         autoescape=autoescape,
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,

@@ -14,6 +14,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr
 
 from .errors import InputError
+from .resources import resolve
 from .validation import read_toml, validate
 
 PLANT_STATES = ("s", "theta", "s_dot", "theta_dot")
@@ -135,8 +136,9 @@ class DesignSpec(_Strict):
 
 
 def load_spec(path: str | Path) -> DesignSpec:
-    """Read and fully check a design spec; every problem is an InputError naming file and field."""
-    spec = validate(DesignSpec, read_toml(path), str(path))
+    """Read and fully check a design spec (a file, or a shipped design by name such as
+    ``bench-recommended``); every problem is an InputError naming file and field."""
+    spec = validate(DesignSpec, read_toml(resolve("design", path)), str(path))
     spec._path = str(path)
     check_spec(spec)
     return spec

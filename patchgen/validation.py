@@ -3,19 +3,21 @@
 from __future__ import annotations
 
 import tomllib
+from importlib.resources.abc import Traversable
 from pathlib import Path
 from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
 
 from .errors import InputError
+from .resources import resolve
 
 M = TypeVar("M", bound=BaseModel)
 
 
-def read_toml(path: str | Path) -> dict[str, Any]:
-    """Parse a TOML file; a missing file or a syntax error is an InputError."""
-    p = Path(path)
+def read_toml(path: str | Path | Traversable) -> dict[str, Any]:
+    """Parse a TOML file (a path or a shipped resource); a missing file or a syntax error is an InputError."""
+    p = path if isinstance(path, Traversable) else Path(path)
     try:
         with p.open("rb") as fh:
             return tomllib.load(fh)
@@ -64,14 +66,9 @@ def validate(model: type[M], data: Any, source: str, prefix: str = "") -> M:
         raise InputError(source, where, msg) from None
 
 
-def load_profile(model: type[M], folder: Path, name_or_path: str, kind: str, source: str, field: str) -> M:
-    """A shipped profile by id (a file ``folder/<id>.toml``) or any profile file by path."""
-    path = Path(name_or_path)
-    if not path.suffix:
-        path = folder / f"{name_or_path}.toml"
-        if not path.exists():
-            known = ", ".join(sorted(p.stem for p in folder.glob("*.toml")))
-            raise InputError(source or name_or_path, field, f"unknown {kind} {name_or_path!r} (known: {known})")
-    elif not path.is_file():
+def load_profile(model: type[M], name_or_path: str, kind: str, source: str, field: str) -> M:
+    """A shipped profile by id (``uw-1991``) or any profile file by path."""
+    path = resolve(kind, name_or_path, source, field)
+    if isinstance(path, Path) and not path.is_file():
         raise InputError(source or name_or_path, field, f"no {kind} profile file {name_or_path!r}")
-    return validate(model, read_toml(path), str(path))
+    return validate(model, read_toml(path), str(name_or_path) if not isinstance(path, Path) else str(path))

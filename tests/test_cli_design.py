@@ -18,7 +18,7 @@ def run(*args, cwd=ROOT):
 
 
 def test_case1_json_contract():
-    r = run("design", "designs/thesis-case1.toml", "--json")
+    r = run("design", "thesis-case1", "--json")
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     assert d["states"] == ["s", "theta", "s_dot", "theta_dot", "int_s", "int_theta"]
@@ -35,14 +35,14 @@ def test_case1_json_contract():
 
 @pytest.mark.parametrize("name", SHIPPED)
 def test_every_shipped_design_runs(name):
-    r = run("design", f"designs/{name}.toml", "--json")
+    r = run("design", name, "--json")
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     assert all(p[0] < 0 for p in d["closed_loop_poles"])
 
 
 def test_text_report_has_tables():
-    r = run("design", "designs/thesis-case1.toml")
+    r = run("design", "thesis-case1")
     assert r.returncode == 0
     for s in ("LQR gain", "-249.4119", "Kalman gain", "Loop margins", "-11.19 dB", "79.12"):
         assert s in r.stdout
@@ -115,7 +115,7 @@ def test_zero_at_origin_is_not_stabilisable(tmp_path: Path):
 
 
 def test_usage_errors_are_one_line():
-    for args in (["design"], ["nosuch"], ["simulate", "designs/thesis-ch5.toml", "--scenario", "sims/hold-120s.toml",
+    for args in (["design"], ["nosuch"], ["simulate", "thesis-ch5", "--scenario", "hold-120s",
                                           "-o", "/tmp/never", "--runs", "0"]):
         r = run(*args)
         assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr

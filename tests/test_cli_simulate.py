@@ -21,16 +21,16 @@ def run(*args):
 
 
 def test_ch5_patch_fails_on_the_bench_and_says_why(tmp_path):
-    r = run("simulate", "designs/thesis-ch5.toml", "--scenario", "sims/hold-120s.toml", "-o", str(tmp_path / "o"),
+    r = run("simulate", "thesis-ch5", "--scenario", "hold-120s", "-o", str(tmp_path / "o"),
             "--json")
     assert r.returncode == 0, r.stderr
     s = json.loads(r.stdout)
     assert s["first_run"]["held"] is False and s["first_run"]["limit_switch_tripped"] is True
     for f in ("history.csv", "runs.csv", "summary.json", "history.png", "history.svg", "netlist.json"):
         assert (tmp_path / "o" / f).exists()
-    r = run("simulate", "designs/thesis-ch5.toml", "--scenario", "sims/hold-120s.toml", "-o", str(tmp_path / "o"))
+    r = run("simulate", "thesis-ch5", "--scenario", "hold-120s", "-o", str(tmp_path / "o"))
     assert r.returncode == 2 and "--force" in r.stderr  # never overwrites silently
-    r = run("simulate", "designs/thesis-ch5.toml", "--scenario", "sims/hold-120s.toml", "-o", str(tmp_path / "t"))
+    r = run("simulate", "thesis-ch5", "--scenario", "hold-120s", "-o", str(tmp_path / "t"))
     assert "UNSTABLE" in r.stdout and "bench actuator (lag 0.2 s)" in r.stdout
 
 
@@ -46,17 +46,17 @@ def test_linearised_ch5_loop_matches_conventions():
 
 def test_bad_scenario_field_one_line(tmp_path):
     p = tmp_path / "bad.toml"
-    p.write_text((ROOT / "sims" / "offset-10deg.toml").read_text().replace("duration_s", "duration"))
-    r = run("simulate", "designs/thesis-ch5.toml", "--scenario", str(p), "-o", str(tmp_path / "o"))
+    p.write_text((ROOT / "patchgen" / "sims" / "offset-10deg.toml").read_text().replace("duration_s", "duration"))
+    r = run("simulate", "thesis-ch5", "--scenario", str(p), "-o", str(tmp_path / "o"))
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
     assert str(p) in r.stderr and "duration" in r.stderr
     assert not (tmp_path / "o").exists()
 
 
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
-@pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "designs").glob("*.toml")))
+@pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "patchgen" / "designs").glob("*.toml")))
 def test_spice_ideal_agrees_within_one_percent(tmp_path, name):
-    r = run("spice", f"designs/{name}.toml", "--scenario", "sims/offset-10deg.toml", "--ideal", "-o",
+    r = run("spice", name, "--scenario", "offset-10deg", "--ideal", "-o",
             str(tmp_path), "--json")
     if r.returncode == 2:  # a design that does not fit the machine: the one-line resource error
         assert "needs" in r.stderr and len(r.stderr.strip().splitlines()) == 1
@@ -70,8 +70,8 @@ def test_spice_ideal_agrees_within_one_percent(tmp_path, name):
 def test_spice_without_ngspice_writes_deck_and_exits_3(tmp_path):
     env_path = str(tmp_path / "empty")
     (tmp_path / "empty").mkdir()
-    r = subprocess.run([sys.executable, "-m", "patchgen", "spice", "designs/thesis-ch5.toml", "--scenario",
-                        "sims/offset-10deg.toml", "--ideal", "-o", str(tmp_path / "o")],
+    r = subprocess.run([sys.executable, "-m", "patchgen", "spice", "thesis-ch5", "--scenario",
+                        "offset-10deg", "--ideal", "-o", str(tmp_path / "o")],
                        capture_output=True, text=True, cwd=ROOT, env={"PATH": env_path, "HOME": str(tmp_path)})
     assert r.returncode == 3, r.stderr
     assert "apt-get install ngspice" in r.stderr and (tmp_path / "o" / "patch.cir").exists()
@@ -85,7 +85,7 @@ def test_parameter_spread_monte_carlo():
     d, m = design_from_path(design_path("bench-recommended"))
     net = build_patch(d, m)
     plant, bench = plant_params(d.spec), load_bench("uw-1991")
-    sc = load_scenario(ROOT / "sims" / "offset-10deg.toml")
+    sc = load_scenario(ROOT / "patchgen" / "sims" / "offset-10deg.toml")
     base = simulate(net, plant, bench, m, sc, runs=8, keep_history=False)
     zero = simulate(net, plant, bench, m, sc, runs=8, keep_history=False, spread={"M": 0.0})
     wide = simulate(net, plant, bench, m, sc, runs=8, keep_history=False, spread={"M": 0.3, "l": 0.3})
@@ -99,7 +99,7 @@ def test_parameter_spread_monte_carlo():
 
 
 def test_patch_json(tmp_path):
-    r = run("patch", "designs/thesis-ch5.toml", "-o", str(tmp_path / "o"), "--json", "--no-predict")
+    r = run("patch", "thesis-ch5", "-o", str(tmp_path / "o"), "--json", "--no-predict")
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
     assert {p["signal"] for p in d["pots"] if p["weight"] == 10} == {"theta", "s_dot"}

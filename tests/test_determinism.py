@@ -14,8 +14,8 @@ def run(*args):
 
 
 @pytest.mark.parametrize("args", [
-    ["patch", "designs/thesis-ch5.toml", "--runs", "4"],
-    ["simulate", "designs/bench-recommended.toml", "--scenario", "sims/finger-push.toml", "--runs", "3"],
+    ["patch", "thesis-ch5", "--runs", "4"],
+    ["simulate", "bench-recommended", "--scenario", "finger-push", "--runs", "3"],
 ])
 def test_two_runs_same_bytes(tmp_path, args):
     run(*args, "-o", str(tmp_path / "a"))
@@ -27,7 +27,7 @@ def test_two_runs_same_bytes(tmp_path, args):
 
 
 def test_failed_patch_writes_nothing(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "patchgen", "patch", "designs/thesis-case1.toml", "-o",
+    r = subprocess.run([sys.executable, "-m", "patchgen", "patch", "thesis-case1", "-o",
                         str(tmp_path / "o")], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 2 and "needs" in r.stderr and "has 8 amplifiers" in r.stderr
     assert not (tmp_path / "o").exists()

@@ -33,7 +33,7 @@ def test_bench_recommended_from_hanging_to_held():
 
 
 def test_swingup_cli_writes_schedule_on_the_sheet(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "patchgen", "swingup", "designs/bench-recommended.toml", "-o",
+    r = subprocess.run([sys.executable, "-m", "patchgen", "swingup", "bench-recommended", "-o",
                         str(tmp_path), "--json"], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 0, r.stderr
     s = json.loads(r.stdout)

@@ -25,7 +25,7 @@ from patchgen.spec import load_spec
 from .conftest import ROOT, design_path
 from .test_patch_roundtrip import check_roundtrip
 
-HOLD = ROOT / "sims" / "hold-120s.toml"
+HOLD = ROOT / "patchgen" / "sims" / "hold-120s.toml"
 RUNS = 200  # the figure: 200 noise seeds
 
 

@@ -10,7 +10,7 @@ import pytest
 from patchgen.errors import InputError
 from patchgen.scenario import NoiseLevels, load_scenario
 
-SIMS = Path(__file__).resolve().parents[1] / "sims"
+SIMS = Path(__file__).resolve().parents[1] / "patchgen" / "sims"
 
 
 @pytest.mark.parametrize("name", ["offset-10deg", "finger-push", "step-cart", "hold-120s"])

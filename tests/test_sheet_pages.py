@@ -23,9 +23,9 @@ def print_pages(html, tmp_path):
 
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
 @pytest.mark.parametrize("args", [
-    ["patch", "designs/thesis-ch5.toml", "--runs", "4"],
-    ["patch", "designs/bench-recommended.toml", "--runs", "4"],
-    ["swingup", "designs/bench-recommended.toml"],
+    ["patch", "thesis-ch5", "--runs", "4"],
+    ["patch", "bench-recommended", "--runs", "4"],
+    ["swingup", "bench-recommended"],
 ])
 def test_written_sheet_fits_two_pages(tmp_path, args):
     out = tmp_path / "out"

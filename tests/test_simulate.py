@@ -18,7 +18,7 @@ from patchgen.scenario import Scenario, load_scenario
 from patchgen.simulate import simulate, write_outputs
 
 ROOT = Path(__file__).resolve().parents[1]
-SIMS = ROOT / "sims"
+SIMS = ROOT / "patchgen" / "sims"
 # thesis table B.1
 PLANT = PlantParams(M=3.552, m=0.324, l=0.429, g=9.807, b_VF=2.5775, c=0.001, d=1.090)
 BENCH = load_bench("uw-1991")

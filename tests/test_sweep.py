@@ -54,11 +54,11 @@ def test_bad_options():
 
 
 def test_cli_json_and_bad_vary():
-    r = subprocess.run([sys.executable, "-m", "patchgen", "sweep", "designs/thesis-case1.toml", "--vary",
+    r = subprocess.run([sys.executable, "-m", "patchgen", "sweep", "thesis-case1", "--vary",
                         "M,m,l,b_VF,c", "--by", "10%", "--json"], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 0, r.stderr
     rows = json.loads(r.stdout)
     assert len(rows) == 12 and rows[0]["case"] == "nominal"
-    r = subprocess.run([sys.executable, "-m", "patchgen", "sweep", "designs/thesis-case1.toml", "--vary", "Mx"],
+    r = subprocess.run([sys.executable, "-m", "patchgen", "sweep", "thesis-case1", "--vary", "Mx"],
                        capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 2 and "Mx" in r.stderr and len(r.stderr.strip().splitlines()) == 1

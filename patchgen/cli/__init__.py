@@ -10,7 +10,7 @@ import click
 from .. import __version__
 from ..errors import InputError
 
-COMMANDS = ("design", "patch", "simulate", "spice", "recommend", "swingup", "sweep")
+COMMANDS = ("design", "patch", "simulate", "spice", "recommend", "swingup", "sweep", "examples")
 
 
 class _Group(click.Group):
@@ -46,6 +46,10 @@ def cli() -> None:
     patchgen recommend SPEC -o DIR       every realisation on the bench, the best patch
     patchgen swingup SPEC -o DIR         pump-up, hand-off, hold with the patch
     patchgen sweep SPEC                  gains, margins, pots with parameters off by 10%
+    patchgen examples DIR                copy the shipped designs and scenarios to edit
+
+    SPEC is a TOML file or a shipped design by name (bench-recommended,
+    thesis-ch5, thesis-case1, ...); --scenario likewise (hold-120s, ...).
     """
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import click
 from rich.console import Console
@@ -46,8 +45,6 @@ def why_section(rec: Recommendation, machine) -> SheetSection:
             "worst swing." + (" Not fitting: " + "; ".join(misfits) + "." if misfits else ""))
     return SheetSection("Why this patch", header, rows, note)
 
-DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "sims" / "hold-120s.toml"
-
 
 def _fmt(x, fmt, none="-"):
     return none if x is None else (fmt.format(x) if math.isfinite(x) else "inf")
@@ -59,8 +56,8 @@ def _fmt(x, fmt, none="-"):
               help="Directory for the recommended patch (as patchgen patch writes it).")
 @click.option("--runs", default=200, show_default=True, type=click.IntRange(1, 100000),
               help="Monte Carlo noise seeds per realisation.")
-@click.option("--scenario", "scenario_path", default=str(DEFAULT_SCENARIO), show_default="sims/hold-120s.toml",
-              type=click.Path(dir_okay=False), help="Scenario to simulate.")
+@click.option("--scenario", "scenario_path", default="hold-120s", show_default=True,
+              type=click.Path(dir_okay=False), help="Scenario: a shipped name or a TOML file.")
 @click.option("--seed", default=None, type=int, help="Base seed (default: the scenario's).")
 @click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import click
 from rich.console import Console
@@ -13,8 +12,6 @@ from ..scenario import load_scenario
 from ..sweep import parse_by, parse_vary, sweep
 from . import cli
 from .design import design_from_path
-
-DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "sims" / "offset-10deg.toml"
 
 
 def _db(x):
@@ -26,8 +23,9 @@ def _db(x):
 @click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters to vary, comma-separated.")
 @click.option("--by", "by_text", default="10%", show_default=True, help="Relative change, e.g. 10%.")
 @click.option("--workers", default=0, type=click.IntRange(0, 64), help="Processes (0: one per core).")
-@click.option("--scenario", "scenario_path", default=str(DEFAULT_SCENARIO), show_default="sims/offset-10deg.toml",
-              type=click.Path(dir_okay=False), help="Scenario for the predicted outcome of the nominal patch.")
+@click.option("--scenario", "scenario_path", default="offset-10deg", show_default=True,
+              type=click.Path(dir_okay=False),
+              help="Scenario (shipped name or TOML file) for the nominal patch's predicted outcome.")
 @click.option("--runs", type=click.IntRange(1, 10000), default=1, show_default=True,
               help="Noise seeds per row for the predicted outcome.")
 @click.option("--json", "as_json", is_flag=True, help="Print the rows as JSON.")

@@ -2,11 +2,14 @@
 
 import json
 
+import pytest
+
 from patchgen.cli.design import design_from_path
 from patchgen.netlist import SCHEMA_ID, Netlist, json_schema
 from patchgen.patch import build_patch
 
 from .conftest import ROOT, design_path
+from .golden import assert_matches
 
 
 def test_schema_file_is_current():
@@ -22,7 +25,25 @@ def test_written_netlist_is_deterministic_and_reads_back():
     assert Netlist.model_validate_json(a).to_json() == a
 
 
+# Coefficients are volts per volt set on a dial of 0.001 resolution; a millionth of that step
+# (or a part in a million) is far below anything a pot can show, and far above the last-digit
+# differences between machines and LAPACK builds.
+GOLDEN_RTOL, GOLDEN_ATOL = 1e-6, 1e-9
+
+
 def test_golden_ch5_netlist():
-    # the fixture other tests read is exactly what patchgen writes for the section 5.3 design
+    # the fixture other tests read is what patchgen writes for the section 5.3 design: the same
+    # amplifiers, jacks, pots and signs exactly, every number within the tolerance above
     d, m = design_from_path(design_path("thesis-ch5"))
-    assert build_patch(d, m).to_json() == (ROOT / "tests" / "fixtures" / "thesis-ch5.netlist.json").read_text()
+    got = json.loads(build_patch(d, m).to_json())
+    want = json.loads((ROOT / "tests" / "fixtures" / "thesis-ch5.netlist.json").read_text())
+    assert_matches(got, want, GOLDEN_RTOL, GOLDEN_ATOL)
+
+
+def test_golden_comparison_catches_a_changed_sign_or_pot():
+    want = json.loads((ROOT / "tests" / "fixtures" / "thesis-ch5.netlist.json").read_text())
+    pot = want["pots"][0]
+    key = next(k for k, v in pot.items() if isinstance(v, float) and v != 0)
+    for changed in ({**pot, key: pot[key] * (1 + 1e-4)}, {**pot, key: -pot[key]}):
+        with pytest.raises(AssertionError):
+            assert_matches({**want, "pots": [changed, *want["pots"][1:]]}, want, GOLDEN_RTOL, GOLDEN_ATOL)

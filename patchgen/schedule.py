@@ -15,14 +15,16 @@ the switching times).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
+import numba as nb
 import numpy as np
 from scipy.optimize import minimize
 
+from .engine import plant_rhs
 from .handoff import Zone, wrapped
-from .nonlinear_step import rk4_step
-from .plant import PlantParams, nonlinear_rhs
+from .plant import PlantParams
 from .swingup import (
     Schedule,
     ScheduleReplay,
@@ -76,33 +78,50 @@ def _batch_terminal(
     """Simulate B schedules from hanging at rest: starts (n, B) switching times, T_F (B,).
 
     Returns x(T_F) (4, B) by cubic Hermite interpolation on the grid, and max |s| on [0, T_F].
+    The optimiser calls this hundreds of times, so the loop is compiled (the plant's equations are
+    the engine's, eq. 2.16-2.19).
     """
-    _, B = starts.shape
-    ends = np.vstack([starts[1:], np.full((1, B), np.inf)])
-    x = np.repeat(hanging_state()[:, None], B, axis=1)
-    k_T = np.floor(T_F / h).astype(int)
-    steps = int(k_T.max()) + 1
-    s_max = np.zeros(B)
+    p = np.array([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c], dtype=float)
+    return _terminal_kernel(p, np.ascontiguousarray(starts, dtype=float), np.asarray(forces, dtype=float),
+                            np.asarray(T_F, dtype=float), float(h), hanging_state().astype(float))
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _terminal_kernel(p, starts, forces, T_F, h, x0):
+    n, B = starts.shape
     x_T = np.zeros((4, B))
-    for k in range(steps):
-        t0 = k * h
-        overlap = np.clip(np.minimum(ends, t0 + h) - np.maximum(starts, t0), 0.0, None)
-        u = forces @ overlap / h
-        x1 = rk4_step(plant, x, u, h)
-        live = k <= k_T
-        s_max = np.where(live, np.maximum(s_max, np.abs(x[0])), s_max)
-        here = k_T == k
-        if here.any():
-            f0 = nonlinear_rhs(plant, x, u)
-            f1 = nonlinear_rhs(plant, x1, u)
-            tau = T_F / h - k
-            h00 = 2 * tau**3 - 3 * tau**2 + 1
-            h10 = tau**3 - 2 * tau**2 + tau
-            h01 = -2 * tau**3 + 3 * tau**2
-            h11 = tau**3 - tau**2
-            xi = h00 * x + h10 * h * f0 + h01 * x1 + h11 * h * f1
-            x_T[:, here] = xi[:, here]
-        x = x1
+    s_max = np.zeros(B)
+    for b in range(B):
+        s, th, sd, thd = x0[0], x0[1], x0[2], x0[3]
+        k_T = int(math.floor(T_F[b] / h))
+        for k in range(k_T + 1):
+            t0 = k * h
+            u = 0.0
+            for j in range(n):  # the force held over [t0, t0 + h], averaged over the step
+                end = starts[j + 1, b] if j + 1 < n else np.inf
+                u += forces[j] * max(min(end, t0 + h) - max(starts[j, b], t0), 0.0)
+            u /= h
+            a0, a1, a2, a3 = plant_rhs(p, th, sd, thd, u, 0.0)
+            b0, b1, b2, b3 = plant_rhs(p, th + 0.5 * h * a1, sd + 0.5 * h * a2, thd + 0.5 * h * a3, u, 0.0)
+            c0, c1, c2, c3 = plant_rhs(p, th + 0.5 * h * b1, sd + 0.5 * h * b2, thd + 0.5 * h * b3, u, 0.0)
+            d0, d1, d2, d3 = plant_rhs(p, th + h * c1, sd + h * c2, thd + h * c3, u, 0.0)
+            s1 = s + (h / 6.0) * (a0 + 2.0 * b0 + 2.0 * c0 + d0)
+            th1 = th + (h / 6.0) * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
+            sd1 = sd + (h / 6.0) * (a2 + 2.0 * b2 + 2.0 * c2 + d2)
+            thd1 = thd + (h / 6.0) * (a3 + 2.0 * b3 + 2.0 * c3 + d3)
+            s_max[b] = max(s_max[b], abs(s))
+            if k == k_T:  # cubic Hermite between the grid points, slopes f(x) and f(x1)
+                e0, e1, e2, e3 = plant_rhs(p, th1, sd1, thd1, u, 0.0)
+                tau = T_F[b] / h - k
+                h00 = 2 * tau**3 - 3 * tau**2 + 1
+                h10 = tau**3 - 2 * tau**2 + tau
+                h01 = -2 * tau**3 + 3 * tau**2
+                h11 = tau**3 - tau**2
+                x_T[0, b] = h00 * s + h10 * h * a0 + h01 * s1 + h11 * h * e0
+                x_T[1, b] = h00 * th + h10 * h * a1 + h01 * th1 + h11 * h * e1
+                x_T[2, b] = h00 * sd + h10 * h * a2 + h01 * sd1 + h11 * h * e2
+                x_T[3, b] = h00 * thd + h10 * h * a3 + h01 * thd1 + h11 * h * e3
+            s, th, sd, thd = s1, th1, sd1, thd1
     return x_T, s_max
 
 

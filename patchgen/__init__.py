@@ -1,3 +1,3 @@
 """patchgen: from an optimal cart-pendulum controller to a checked Comdyna GP-6 patch."""
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

@@ -225,24 +225,35 @@ def plant_rhs(p, th, sd, thd, force, tip_force):
 
 
 @nb.njit(inline="always", **_JIT)
-def _weighted_sum(j, in_ptr, in_src, in_gain, sig, acc):
-    """acc[lane] = sum of amplifier j's inputs times their gains."""
-    for l in range(acc.shape[0]):
-        acc[l] = 0.0
-    for k in range(in_ptr[j], in_ptr[j + 1]):
+def _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc):
+    """acc[0, lane] = 0 + amplifier j's inputs times their gains but the last. Returns the row
+    of acc holding that sum (row 1 is zeros: at most one input) and the last input's signal and
+    gain, for the caller to add in its own loop over lanes (a pass fewer). Without inputs: the
+    zero row at the end of sig, gain 0."""
+    lo, hi = in_ptr[j], in_ptr[j + 1] - 1
+    if hi < lo:
+        return 1, sig.shape[0] - 1, 0.0
+    for k in range(lo, hi):
         g, src = in_gain[k], in_src[k]
-        for l in range(acc.shape[0]):
-            acc[l] += g * sig[src, l]
+        if k == lo:
+            for l in range(acc.shape[1]):
+                acc[0, l] = 0.0 + g * sig[src, l]
+        else:
+            for l in range(acc.shape[1]):
+                acc[0, l] += g * sig[src, l]
+    return (0 if hi > lo else 1), in_src[hi], in_gain[hi]
 
 
 @nb.njit(**_JIT)
 def _circuit(X, Z, s_ref, nz, sensor_state, sensor_gain, amp_kind, in_ptr, in_src, in_gain,
              param1, param2, drift, sat, clip, sig, raw, dz, st, acc):
-    """Sensors and amplifiers in evaluation order: sig (clipped if clip), raw (before clipping),
-    and the amplifier state derivatives into dz[st]; every array (quantity, lane). Indexing, not
-    views: a view per row and step would cost more than the row's arithmetic."""
+    """Sensors and amplifiers in evaluation order: sig (clipped if clip; its last row stays 0),
+    raw (before clipping), and the amplifier state derivatives into dz[st] (a summer's stay 0);
+    every array (quantity, lane). Indexing, not views: a view per row and step would cost more
+    than the row's arithmetic."""
     ns = sensor_state.shape[0]
-    nl = acc.shape[0]
+    nl = acc.shape[1]
+    hi = sat if clip else np.inf
     for i in range(ns):
         q, g = sensor_state[i], sensor_gain[i]
         ref = s_ref if q == S_INDEX else 0.0
@@ -253,38 +264,36 @@ def _circuit(X, Z, s_ref, nz, sensor_state, sensor_gain, amp_kind, in_ptr, in_sr
         kd, a = amp_kind[j], ns + j
         if kd == INTEGRATOR or kd == LAG:
             for l in range(nl):
-                raw[j, l] = Z[j, l] + nz[a, l]
-        else:
-            _weighted_sum(j, in_ptr, in_src, in_gain, sig, acc)
-            if kd == SUMMER:
-                for l in range(nl):
-                    raw[j, l] = -acc[l] + nz[a, l]
-                    dz[st, j, l] = 0.0
-            else:  # DIFFERENTIATOR with roll-off
-                p1, p2 = param1[j], param2[j]
-                for l in range(nl):
-                    e = acc[l] - Z[j, l]
-                    raw[j, l] = -p1 * e + nz[a, l]
-                    dz[st, j, l] = p2 * e
-        if clip:
+                v = Z[j, l] + nz[a, l]
+                raw[j, l] = v
+                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+            continue
+        b, src, g = _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc)
+        if kd == SUMMER:
             for l in range(nl):
-                v = raw[j, l]
-                sig[a, l] = sat if v > sat else (-sat if v < -sat else v)
-        else:
+                v = -(acc[b, l] + g * sig[src, l]) + nz[a, l]
+                raw[j, l] = v
+                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+        else:  # DIFFERENTIATOR with roll-off
+            p1, p2 = param1[j], param2[j]
             for l in range(nl):
-                sig[a, l] = raw[j, l]
+                e = acc[b, l] + g * sig[src, l] - Z[j, l]
+                v = -p1 * e + nz[a, l]
+                raw[j, l] = v
+                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+                dz[st, j, l] = p2 * e
     # last, the integrating amplifiers' inputs, now that every signal of this instant is known
     for j in range(amp_kind.shape[0]):
         kd = amp_kind[j]
         if kd == INTEGRATOR or kd == LAG:
-            _weighted_sum(j, in_ptr, in_src, in_gain, sig, acc)
+            b, src, g = _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc)
             p1 = param1[j]
             if kd == INTEGRATOR:
                 for l in range(nl):
-                    dz[st, j, l] = -p1 * acc[l] + drift[j, l]
+                    dz[st, j, l] = -p1 * (acc[b, l] + g * sig[src, l]) + drift[j, l]
             else:
                 for l in range(nl):
-                    dz[st, j, l] = p1 * (-acc[l] - Z[j, l]) + drift[j, l]
+                    dz[st, j, l] = p1 * (-(acc[b, l] + g * sig[src, l]) - Z[j, l]) + drift[j, l]
 
 
 @nb.njit(**_JIT)
@@ -355,12 +364,12 @@ def run_block(lo, nl, keys, signs, plants, fpar, ipar, x0, sensor_state, sensor_
         for c in range(nch):
             for l in range(nl):
                 nz[c, l] = z[c, l] * noise_std[c] / math.sqrt(1.0 - noise_a[c] * noise_a[c])
-    sig = np.zeros((nch, nl))
+    sig = np.zeros((nch + 1, nl))  # signals, and a row of zeros (the input of an unwired amplifier)
     raw = np.zeros((na, nl))
     kp = np.zeros((4, 4, nl))  # RK4 slopes of the plant, amplifier and actuator states
     ka = np.zeros((4, na, nl))
     kx = np.zeros((4, nl))
-    acc = np.empty(nl)
+    acc = np.zeros((2, nl))  # a partial sum of inputs, and zeros
     xt = np.empty((4, nl))
     zt = np.empty((na, nl))
     xa = np.zeros(nl)
@@ -516,7 +525,7 @@ def _record(hist, hist_len, r, l, t, xp, s_ref, sig, out_index, forces, ns):
     for i in range(4):
         hist[r, k, 1 + i] = xp[i, l]
     hist[r, k, 5], hist[r, k, 6], hist[r, k, 7] = s_ref, sig[out_index, l], forces[0, l]
-    for j in range(sig.shape[0] - ns):
+    for j in range(hist.shape[2] - 8):
         hist[r, k, 8 + j] = sig[ns + j, l]
     hist_len[r] = k + 1
 

@@ -14,10 +14,11 @@ a change in a callee elsewhere would not invalidate it.
 
 Noise: counter-based, so drawn inside the loop for all lanes at once. Philox4x32-10 (Salmon et
 al., "Parallel random numbers: as easy as 1, 2, 3", SC 2011) with the run's key and counter
-(step, channel group, attempt, domain) gives the bits; the Marsaglia-Tsang ziggurat (256 layers,
-23-bit uniforms, the resolution of the float32 normals used before) makes them normal. A draw
-outside the layers' inner rectangles (about 1 %) takes the wedge or tail test with further
-counters of its step and channel.
+(step, channel group, attempt, domain) gives the bits; the Marsaglia-Tsang ziggurat makes each
+32-bit word normal: 10 bits pick one of 1024 layers, 1 the sign, 21 the abscissa (a resolution of
+5e-7 of the layer's width). A word outside its layer's inner rectangle (0.43 % of them; 1.5 %
+with 256 layers, where the refused words cost more than the rest) takes the wedge or tail test
+with further counters of its step and channel.
 """
 
 from __future__ import annotations
@@ -47,16 +48,20 @@ _JIT = {"cache": True, "error_model": "numpy"}
 
 _M0, _M1 = np.uint64(0xD2511F53), np.uint64(0xCD9E8D57)
 _W0, _W1 = np.uint64(0x9E3779B9), np.uint64(0xBB67AE85)
-_LO, _S8, _S9, _S32 = np.uint64(0xFFFFFFFF), np.uint64(8), np.uint64(9), np.uint64(32)
-_BYTE, _ZERO, _ONE = np.uint64(0xFF), np.uint64(0), np.uint64(1)
+_LO, _S32 = np.uint64(0xFFFFFFFF), np.uint64(32)
+_ZERO, _ONE = np.uint64(0), np.uint64(1)
+_LAYER_BITS = 10
+_J_BITS = 32 - _LAYER_BITS - 1
+_LAYER, _SIGN_SHIFT, _J_SHIFT = np.uint64(2**_LAYER_BITS - 1), np.uint64(_LAYER_BITS), np.uint64(_LAYER_BITS + 1)
 WORDS = 4  # normals per Philox call: channels are drawn in groups of four
 
 
-def _ziggurat(layers: int = 256, r: float = 3.6541528853610088):
+def _ziggurat(layers: int = 2**_LAYER_BITS, r: float = 4.038849846109505):
     """Layer edges x_0 > x_1 = r > ... > x_layers = 0 of equal area v under f = exp(-x^2/2)
-    (layer 0: the rectangle below f(r), x_0 = v / f(r), plus the tail), and per layer: w
-    (x = j w for a 23-bit j), k (j < k is under the curve at every height of the layer), f at its
-    outer and inner edge."""
+    (layer 0: the rectangle below f(r), x_0 = v / f(r), plus the tail), r being the edge at which
+    that many layers close at the top (found by bisection; tests/test_kernel.py checks it); and
+    per layer: w (x = j w for a _J_BITS-bit j), k (j < k is under the curve at every height of the
+    layer), f at its outer and inner edge."""
     f = lambda x: math.exp(-0.5 * x * x)
     v = r * f(r) + math.sqrt(math.pi / 2) * math.erfc(r / math.sqrt(2))
     x = [v / f(r), r]
@@ -64,8 +69,8 @@ def _ziggurat(layers: int = 256, r: float = 3.6541528853610088):
         x.append(math.sqrt(-2.0 * math.log(f(x[-1]) + v / x[-1])))
     x = np.array(x + [0.0])
     fx = np.exp(-0.5 * x * x)
-    k = np.floor(x[1:] / x[:-1] * 2.0**23).astype(np.uint64)
-    return x, x[:-1] / 2.0**23, k, fx[:-1], fx[1:]
+    k = np.floor(x[1:] / x[:-1] * 2.0**_J_BITS).astype(np.uint64)
+    return x, x[:-1] / 2.0**_J_BITS, k, fx[:-1], fx[1:]
 
 
 ZIGGURAT_EDGES, _ZW, _ZK, _ZF_OUT, _ZF_IN = _ziggurat()
@@ -88,10 +93,10 @@ def philox(c0, c1, c2, c3, k0, k1):
 @nb.njit(inline="always", **_JIT)
 def _zig_fast(word):
     """A normal from the inner rectangle of the layer a 32-bit word picks: (z, accepted)."""
-    idx = word & _BYTE
-    j = word >> _S9
+    idx = word & _LAYER
+    j = word >> _J_SHIFT
     z = np.float64(j) * _ZW[idx]
-    return (-z if (word >> _S8) & _ONE else z), j < _ZK[idx]
+    return (-z if (word >> _SIGN_SHIFT) & _ONE else z), j < _ZK[idx]
 
 
 @nb.njit(**_JIT)
@@ -100,9 +105,9 @@ def _zig_slow(word, n, ch, k0, k1):
     (n, ch, attempt, 1) until one is accepted."""
     attempt = _ZERO
     while True:
-        idx = word & _BYTE
-        j = word >> _S9
-        neg = (word >> _S8) & _ONE
+        idx = word & _LAYER
+        j = word >> _J_SHIFT
+        neg = (word >> _SIGN_SHIFT) & _ONE
         x = np.float64(j) * _ZW[idx]
         if j < _ZK[idx]:
             return -x if neg else x

@@ -165,9 +165,10 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     ``spread`` (e.g. {"M": 0.1, "l": 0.1}) draws each run's plant parameters uniformly within
     those fractions of the nominal: the Monte Carlo then covers model error as well as noise.
 
-    Run i draws from ``numpy.random.default_rng([seed, i])``, so run 0 of a Monte Carlo is the
-    single run of the same seed. ``keep_history`` keeps the first run's time histories.
-    ``progress`` is called with the number of runs done after each batch.
+    Run i draws from ``numpy.random.default_rng([seed, i])`` (drift signs, the key of its
+    counter-based noise, its plant), so run 0 of a Monte Carlo is the single run of the same seed.
+    ``keep_history`` keeps the first run's time histories. ``progress`` is called with the
+    number of runs done after each batch.
     """
     if runs < 1:
         raise InputError("--runs", "", f"must be at least 1 (got {runs})")

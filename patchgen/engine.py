@@ -28,16 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernel
-from .kernel import (  # noqa: F401  (the engine's interface)
-    ACT_GAIN,
-    ACT_LAG,
-    ACT_LAG_ZERO,
-    DIST_CART_FORCE,
-    DIST_STEP,
-    DIST_TIP_FORCE,
-    LANES,
-    plant_rhs,
-)
+from .kernel import DIST_CART_FORCE, DIST_STEP, DIST_TIP_FORCE, LANES  # noqa: F401  (the engine's interface)
+from .lanes import ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, plant_rhs  # noqa: F401
 
 BENCH_DT_S = 0.002
 IDEAL_DT_S = 0.01

@@ -1,5 +1,6 @@
-"""The compiled inner loop, runs side by side: blocks of up to LANES runs, every state an array
-(quantity, lane), every inner loop over lanes, so that LLVM vectorises each operation across runs.
+"""The compiled Monte-Carlo loop, runs side by side: blocks of up to LANES runs, every state an
+array (quantity, lane), every inner loop over lanes (patchgen.lanes, patchgen.noise), so that LLVM
+vectorises each operation across runs.
 
 One step of one block: draw the lanes' noise, four RK4 stages of plant + actuator + circuit,
 clip integrating amplifiers at the rails, check limit switches, fall and overloads. A lane whose
@@ -10,17 +11,12 @@ The arithmetic is plain IEEE, without fast-math, not even fused multiply-add (it
 but LLVM fuses differently in a loop's vectorised body and its scalar remainder), so each lane's
 result is bit for bit the same whatever the number of lanes in its block, its place in the
 block, the number of threads or the order of the blocks: a run depends only on its own inputs
-(tests/test_kernel.py checks it). Every compiled function lives in this one file
-because numba's disk cache is stamped with the content of the file of the function it compiled:
-a change in a callee elsewhere would not invalidate it.
+(tests/test_kernel.py checks it).
 
-Noise: counter-based, so drawn inside the loop for all lanes at once. Philox4x32-10 (Salmon et
-al., "Parallel random numbers: as easy as 1, 2, 3", SC 2011) with the run's key and counter
-(step, channel group, attempt, domain) gives the bits; the Marsaglia-Tsang ziggurat makes each
-32-bit word normal: 10 bits pick one of 1024 layers, 1 the sign, 21 the abscissa (a resolution of
-5e-7 of the layer's width). A word outside its layer's inner rectangle (0.43 % of them; 1.5 %
-with 256 layers, where the refused words cost more than the rest) takes the wedge or tail test
-with further counters of its step and channel.
+numba's disk cache is stamped with the content of the file of the function it compiled, and does
+not see a change in a callee elsewhere: COMPILED_IN holds a digest of patchgen/lanes.py and
+patchgen/noise.py, whose code is compiled into this file's, so that changing them changes this
+file (tests/test_kernel.py says when it is out of date).
 """
 
 from __future__ import annotations
@@ -30,13 +26,13 @@ import math
 import numba as nb
 import numpy as np
 
-from .circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER
-from .plant import PLANT_STATES
+from .circuit import DIFFERENTIATOR
+from .lanes import N_COEF, circuit, drive, plant_coefficients
+from .noise import WORDS, fill_normals
 
+COMPILED_IN = "4544fc8a62cf4a76"  # sha256 of lanes.py then noise.py, first 16 hex digits
 LANES = 64  # runs per block
-ACT_GAIN, ACT_LAG, ACT_LAG_ZERO = 0, 1, 2
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
-S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
 # scalar settings, packed: floats and integers
 F_DT, F_SAT, F_K_U, F_TAU, F_DEAD, F_FLIM, F_FALL = range(7)
 I_STEPS, I_STRIDE, I_LIMIT, I_CLIP, I_OUT, I_ACT = range(6)
@@ -45,293 +41,6 @@ R_TRIP, R_FALL, R_MAX_TH, R_MAX_S, R_RMS_TH, R_MAX_UC, R_MAX_F, R_FINAL = range(
 N_RESULTS = R_FINAL + 4
 # cached on disk; IEEE arithmetic (see above); no Python exceptions for x / 0
 _JIT = {"cache": True, "error_model": "numpy"}
-
-# ---- noise -----------------------------------------------------------------------------------
-
-_M0, _M1 = np.uint64(0xD2511F53), np.uint64(0xCD9E8D57)
-_W0, _W1 = np.uint64(0x9E3779B9), np.uint64(0xBB67AE85)
-_LO, _S32 = np.uint64(0xFFFFFFFF), np.uint64(32)
-_ZERO, _ONE = np.uint64(0), np.uint64(1)
-_LAYER_BITS = 10
-_J_BITS = 32 - _LAYER_BITS - 1
-_LAYER, _SIGN_SHIFT, _J_SHIFT = np.uint64(2**_LAYER_BITS - 1), np.uint64(_LAYER_BITS), np.uint64(_LAYER_BITS + 1)
-WORDS = 4  # normals per Philox call: channels are drawn in groups of four
-
-
-def _ziggurat(layers: int = 2**_LAYER_BITS, r: float = 4.038849846109505):
-    """Layer edges x_0 > x_1 = r > ... > x_layers = 0 of equal area v under f = exp(-x^2/2)
-    (layer 0: the rectangle below f(r), x_0 = v / f(r), plus the tail), r being the edge at which
-    that many layers close at the top (found by bisection; tests/test_kernel.py checks it); and
-    per layer: w (x = j w for a _J_BITS-bit j), k (j < k is under the curve at every height of the
-    layer), f at its outer and inner edge."""
-    f = lambda x: math.exp(-0.5 * x * x)
-    v = r * f(r) + math.sqrt(math.pi / 2) * math.erfc(r / math.sqrt(2))
-    x = [v / f(r), r]
-    for _ in range(layers - 2):
-        x.append(math.sqrt(-2.0 * math.log(f(x[-1]) + v / x[-1])))
-    x = np.array(x + [0.0])
-    fx = np.exp(-0.5 * x * x)
-    k = np.floor(x[1:] / x[:-1] * 2.0**_J_BITS).astype(np.uint64)
-    return x, x[:-1] / 2.0**_J_BITS, k, fx[:-1], fx[1:]
-
-
-ZIGGURAT_EDGES, _ZW, _ZK, _ZF_OUT, _ZF_IN = _ziggurat()
-_ZR = float(ZIGGURAT_EDGES[1])
-
-
-@nb.njit(inline="always", **_JIT)
-def philox(c0, c1, c2, c3, k0, k1):
-    """Philox4x32-10 of counter (c0..c3) and key (k0, k1): uint64 values holding 32-bit words."""
-    for i in range(10):
-        if i > 0:
-            k0 = (k0 + _W0) & _LO
-            k1 = (k1 + _W1) & _LO
-        p0 = _M0 * c0
-        p1 = _M1 * c2
-        c0, c1, c2, c3 = (p1 >> _S32) ^ c1 ^ k0, p1 & _LO, (p0 >> _S32) ^ c3 ^ k1, p0 & _LO
-    return c0, c1, c2, c3
-
-
-@nb.njit(inline="always", **_JIT)
-def _zig_fast(word):
-    """A normal from the inner rectangle of the layer a 32-bit word picks: (z, accepted)."""
-    idx = word & _LAYER
-    j = word >> _J_SHIFT
-    z = np.float64(j) * _ZW[idx]
-    return (-z if (word >> _SIGN_SHIFT) & _ONE else z), j < _ZK[idx]
-
-
-@nb.njit(**_JIT)
-def _zig_slow(word, n, ch, k0, k1):
-    """A word the inner rectangles refused: wedge or tail test, then fresh words from counters
-    (n, ch, attempt, 1) until one is accepted."""
-    attempt = _ZERO
-    while True:
-        idx = word & _LAYER
-        j = word >> _J_SHIFT
-        neg = (word >> _SIGN_SHIFT) & _ONE
-        x = np.float64(j) * _ZW[idx]
-        if j < _ZK[idx]:
-            return -x if neg else x
-        attempt += _ONE
-        o0, o1, o2, _ = philox(n, ch, attempt, _ONE, k0, k1)
-        u1 = (np.float64(o1) + 0.5) * 2.0**-32
-        u2 = (np.float64(o2) + 0.5) * 2.0**-32
-        if idx == 0:  # the tail beyond r (Marsaglia 1964)
-            a = -math.log(u1) / _ZR
-            if -2.0 * math.log(u2) > a * a:
-                return -(_ZR + a) if neg else _ZR + a
-        elif _ZF_OUT[idx] + u1 * (_ZF_IN[idx] - _ZF_OUT[idx]) < math.exp(-0.5 * x * x):
-            return -x if neg else x
-        word = o0
-
-
-@nb.njit(**_JIT)
-def fill_normals(n, k0, k1, z, words):
-    """Standard normals of step n for every channel (row) and lane (column) of z, whose rows are
-    a whole number of groups of WORDS. k0, k1: the lanes' keys (uint64); words: scratch (WORDS,
-    lanes) uint64. Loops kept apart (bits; inner rectangles; the rare rest) so that each vectorises."""
-    c0 = np.uint64(n)
-    for g in range(z.shape[0] // WORDS):
-        c1 = np.uint64(g)
-        for l in range(k0.shape[0]):
-            words[0, l], words[1, l], words[2, l], words[3, l] = philox(c0, c1, _ZERO, _ZERO, k0[l], k1[l])
-        for w in range(WORDS):
-            ch = g * WORDS + w
-            refused = 0
-            for l in range(k0.shape[0]):
-                z[ch, l], accepted = _zig_fast(words[w, l])
-                refused += not accepted
-            if refused:
-                for l in range(k0.shape[0]):
-                    if not _zig_fast(words[w, l])[1]:
-                        z[ch, l] = _zig_slow(words[w, l], c0, np.uint64(ch), k0[l], k1[l])
-
-
-@nb.njit(**_JIT)
-def run_normals(key0, key1, n_steps, nch):
-    """One run's normals, (n_steps + 1, nch): exactly those the engine draws for that key."""
-    k0 = np.full(1, np.uint64(key0))
-    k1 = np.full(1, np.uint64(key1))
-    rows = (nch + WORDS - 1) // WORDS * WORDS
-    z = np.empty((rows, 1))
-    words = np.empty((WORDS, 1), dtype=np.uint64)
-    out = np.empty((n_steps + 1, nch))
-    for n in range(n_steps + 1):
-        fill_normals(n, k0, k1, z, words)
-        out[n] = z[:nch, 0]
-    return out
-
-
-# ---- plant -----------------------------------------------------------------------------------
-
-_TWO_OVER_PI = 2.0 / math.pi
-_PIO2_A = math.ldexp(math.floor(math.ldexp(math.pi / 2, 30)), -30)  # 31 bits: k * _PIO2_A exact
-_PIO2_B = math.pi / 2 - _PIO2_A  # the rest of the double nearest pi/2 (an exact difference)
-_PIO2_C = 6.123233995736766e-17  # pi/2 minus that double
-# Taylor coefficients, highest order first: sin r = r + r z (S1 + z S2 + ...), cos r = 1 + z (C1 + ...)
-_SIN = tuple((-1) ** k / math.factorial(2 * k + 1) for k in range(8, 0, -1))
-_COS = tuple((-1) ** k / math.factorial(2 * k) for k in range(9, 0, -1))
-
-
-@nb.njit(inline="always", **_JIT)
-def sincos(x):
-    """(sin x, cos x) by arithmetic alone, so that a loop over lanes vectorises (libm's are
-    scalar calls): reduction by pi/2 in three parts, then Taylor series on |r| <= pi/4, where the
-    first omitted terms are below 1e-19. Within a few ulp of libm for |x| < 1e5."""
-    k = math.floor(x * _TWO_OVER_PI + 0.5)
-    r = ((x - k * _PIO2_A) - k * _PIO2_B) - k * _PIO2_C
-    z = r * r
-    ps = 0.0
-    for a in _SIN:
-        ps = ps * z + a
-    pc = 0.0
-    for a in _COS:
-        pc = pc * z + a
-    s = r + r * z * ps
-    c = 1.0 + z * pc
-    q = np.int64(k)  # the quadrant, by selects (a return per quadrant stops vectorisation)
-    swap = (q & 1) != 0
-    sn = c if swap else s
-    cs = s if swap else c
-    return (-sn if q & 2 else sn), (-cs if (q + 1) & 2 else cs)
-
-
-N_COEF = 10
-
-
-@nb.njit(inline="always", **_JIT)
-def plant_coefficients(p, out):
-    """The per-run constants of eq. 2.16-2.19 from p = (M, m, l, g, b_VF, c, ...), into out."""
-    M, m, l, g, b, c = p[0], p[1], p[2], p[3], p[4], p[5]
-    out[0], out[1], out[2], out[3], out[4] = M + m, m, m * l, c / l, m * g
-    out[5], out[6], out[7], out[8], out[9] = b, -c / (m * l * l), g / l, 1.0 / (m * l), 1.0 / l
-
-
-@nb.njit(inline="always", **_JIT)
-def plant_accel(q, i, sn, cs, sd, thd, force, tip):
-    """(s_ddot, theta_ddot) of eq. 2.16-2.19 with coefficients q[:, i], plus a horizontal force at
-    the pendulum tip (distance l): generalised forces tip on s and tip * l * cos(theta) on theta."""
-    den = q[0, i] - q[1, i] * cs * cs
-    bracket = -q[5, i] * sd + q[2, i] * thd * thd * sn + q[3, i] * thd * cs - q[4, i] * sn * cs + force
-    sdd = (bracket + tip * sn * sn) / den
-    return sdd, q[6, i] * thd + q[7, i] * sn + tip * cs * q[8, i] - cs * sdd * q[9, i]
-
-
-@nb.njit(**_JIT)
-def plant_rhs(p, th, sd, thd, force, tip_force):
-    """(ds, dtheta, ds_dot, dtheta_dot) as the kernel computes them (p = M, m, l, g, b_VF, c)."""
-    q = np.empty((N_COEF, 1))
-    plant_coefficients(p, q[:, 0])
-    sn, cs = sincos(th)
-    sdd, thdd = plant_accel(q, 0, sn, cs, sd, thd, force, tip_force)
-    return sd, thd, sdd, thdd
-
-
-# ---- circuit ---------------------------------------------------------------------------------
-
-
-@nb.njit(inline="always", **_JIT)
-def _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc):
-    """acc[0, lane] = 0 + amplifier j's inputs times their gains but the last. Returns the row
-    of acc holding that sum (row 1 is zeros: at most one input) and the last input's signal and
-    gain, for the caller to add in its own loop over lanes (a pass fewer). Without inputs: the
-    zero row at the end of sig, gain 0."""
-    lo, hi = in_ptr[j], in_ptr[j + 1] - 1
-    if hi < lo:
-        return 1, sig.shape[0] - 1, 0.0
-    for k in range(lo, hi):
-        g, src = in_gain[k], in_src[k]
-        if k == lo:
-            for l in range(acc.shape[1]):
-                acc[0, l] = 0.0 + g * sig[src, l]
-        else:
-            for l in range(acc.shape[1]):
-                acc[0, l] += g * sig[src, l]
-    return (0 if hi > lo else 1), in_src[hi], in_gain[hi]
-
-
-@nb.njit(**_JIT)
-def _circuit(X, Z, s_ref, nz, sensor_state, sensor_gain, amp_kind, in_ptr, in_src, in_gain,
-             param1, param2, drift, sat, clip, sig, raw, dz, st, acc):
-    """Sensors and amplifiers in evaluation order: sig (clipped if clip; its last row stays 0),
-    raw (before clipping), and the amplifier state derivatives into dz[st] (a summer's stay 0);
-    every array (quantity, lane). Indexing, not views: a view per row and step would cost more
-    than the row's arithmetic."""
-    ns = sensor_state.shape[0]
-    nl = acc.shape[1]
-    hi = sat if clip else np.inf
-    for i in range(ns):
-        q, g = sensor_state[i], sensor_gain[i]
-        ref = s_ref if q == S_INDEX else 0.0
-        for l in range(nl):
-            sig[i, l] = g * (X[q, l] - ref) + nz[i, l]
-    # outputs in evaluation order (integrators and lags, whose outputs are their states, first)
-    for j in range(amp_kind.shape[0]):
-        kd, a = amp_kind[j], ns + j
-        if kd == INTEGRATOR or kd == LAG:
-            for l in range(nl):
-                v = Z[j, l] + nz[a, l]
-                raw[j, l] = v
-                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
-            continue
-        b, src, g = _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc)
-        if kd == SUMMER:
-            for l in range(nl):
-                v = -(acc[b, l] + g * sig[src, l]) + nz[a, l]
-                raw[j, l] = v
-                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
-        else:  # DIFFERENTIATOR with roll-off
-            p1, p2 = param1[j], param2[j]
-            for l in range(nl):
-                e = acc[b, l] + g * sig[src, l] - Z[j, l]
-                v = -p1 * e + nz[a, l]
-                raw[j, l] = v
-                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
-                dz[st, j, l] = p2 * e
-    # last, the integrating amplifiers' inputs, now that every signal of this instant is known
-    for j in range(amp_kind.shape[0]):
-        kd = amp_kind[j]
-        if kd == INTEGRATOR or kd == LAG:
-            b, src, g = _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc)
-            p1 = param1[j]
-            if kd == INTEGRATOR:
-                for l in range(nl):
-                    dz[st, j, l] = -p1 * (acc[b, l] + g * sig[src, l]) + drift[j, l]
-            else:
-                for l in range(nl):
-                    dz[st, j, l] = p1 * (-(acc[b, l] + g * sig[src, l]) - Z[j, l]) + drift[j, l]
-
-
-@nb.njit(**_JIT)
-def _drive(X, XA, sig, out_index, tripped, pc, fpar, act, f_cart, f_tip, kp, kx, forces, st):
-    """Actuator (dead zone, model, force limit; off once tripped) and plant slopes per lane,
-    into kp[st], kx[st], forces[st]."""
-    dz, flim, K_U = fpar[F_DEAD], fpar[F_FLIM], fpar[F_K_U]
-    inv_tau = 1.0 / fpar[F_TAU]
-    ku_tau = K_U / fpar[F_TAU]
-    for l in range(XA.shape[0]):
-        u = sig[out_index, l]
-        v = u - dz if u > dz else (u + dz if u < -dz else 0.0)
-        xa = XA[l]
-        if act == ACT_GAIN:
-            force, dx = K_U * v, 0.0
-        elif act == ACT_LAG:
-            force, dx = xa, (K_U * v - xa) * inv_tau
-        else:
-            force, dx = ku_tau * (v - xa), (v - xa) * inv_tau
-        force = flim if force > flim else (-flim if force < -flim else force)
-        if tripped[l]:
-            force = 0.0
-        sd, thd = X[2, l], X[3, l]
-        sn, cs = sincos(X[1, l])
-        sdd, thdd = plant_accel(pc, l, sn, cs, sd, thd, force + f_cart, f_tip)
-        kp[st, 0, l], kp[st, 1, l], kp[st, 2, l], kp[st, 3, l] = sd, thd, sdd, thdd
-        kx[st, l] = dx
-        forces[st, l] = force
-
-
-# ---- runs ------------------------------------------------------------------------------------
 
 
 @nb.njit(**_JIT)
@@ -342,7 +51,8 @@ def run_block(lo, nl, keys, signs, plants, fpar, ipar, x0, sensor_state, sensor_
     times NaN beforehand) and, for runs below hist.shape[0], hist and hist_len."""
     h, sat = fpar[F_DT], fpar[F_SAT]
     n_steps, stride, limit_on, clip = ipar[I_STEPS], ipar[I_STRIDE], ipar[I_LIMIT] != 0, ipar[I_CLIP] != 0
-    out_index, act = ipar[I_OUT], ipar[I_ACT]
+    out_index = ipar[I_OUT]
+    actuator = (ipar[I_ACT], fpar[F_K_U], fpar[F_TAU], fpar[F_DEAD], fpar[F_FLIM])
     ns, na = sensor_state.shape[0], amp_kind.shape[0]
     nch = ns + na
     pc = np.empty((N_COEF, nl))
@@ -385,8 +95,8 @@ def run_block(lo, nl, keys, signs, plants, fpar, ipar, x0, sensor_state, sensor_
     # filter state to its input, in evaluation order (one pass per amplifier reaches every chain)
     quiet = np.zeros((nch, nl))
     for _ in range(na):
-        _circuit(xp, za, 0.0, quiet, sensor_state, sensor_gain, amp_kind, in_ptr, in_src, in_gain,
-                 param1, param2, drift, sat, False, sig, raw, ka, 0, acc)
+        circuit(xp, za, 0.0, quiet, sensor_state, sensor_gain, amp_kind, in_ptr, in_src, in_gain,
+                param1, param2, drift, sat, False, sig, raw, ka, 0, acc)
         for j in range(na):
             if amp_kind[j] == DIFFERENTIATOR:
                 for l in range(nl):
@@ -423,9 +133,9 @@ def run_block(lo, nl, keys, signs, plants, fpar, ipar, x0, sensor_state, sensor_
                     s_ref += v
         for st in range(4):
             _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat)
-            _circuit(xt, zt, s_ref, nz, sensor_state, sensor_gain, amp_kind, in_ptr, in_src, in_gain,
-                     param1, param2, drift, sat, clip, sig, raw, ka, st, acc)
-            _drive(xt, xat, sig, out_index, tripped, pc, fpar, act, f_cart, f_tip, kp, kx, forces, st)
+            circuit(xt, zt, s_ref, nz, sensor_state, sensor_gain, amp_kind, in_ptr, in_src, in_gain,
+                    param1, param2, drift, sat, clip, sig, raw, ka, st, acc)
+            drive(xt, xat, sig, out_index, tripped, pc, actuator, f_cart, f_tip, kp, kx, forces, st)
             if st == 0:  # record and summarise time t; a run ends at the scenario's end or at a trip
                 for l in range(n_hist):
                     if alive[l] and (n % stride == 0 or n == n_steps or tripped[l]):

@@ -9,7 +9,8 @@ import numpy as np
 
 from patchgen.circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER
 from patchgen.engine import ACT_GAIN, ACT_LAG, DIST_CART_FORCE, DIST_TIP_FORCE, EngineConfig
-from patchgen.kernel import S_INDEX, run_normals
+from patchgen.lanes import S_INDEX
+from patchgen.noise import run_normals
 
 _FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
 

@@ -4,6 +4,7 @@ but its own draws (not its block, its place in it, the threads)."""
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import subprocess
@@ -15,12 +16,14 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from patchgen import kernel
 from patchgen.bench import load_bench
 from patchgen.circuit import compile_circuit
 from patchgen.cli.design import design_from_path
 from patchgen.engine import draw_batch, run_batch
-from patchgen.kernel import ZIGGURAT_EDGES, philox, run_normals, sincos
+from patchgen.lanes import sincos
 from patchgen.model import plant_params
+from patchgen.noise import ZIGGURAT_EDGES, philox, run_normals
 from patchgen.patch import build_patch
 from patchgen.scenario import Scenario, load_scenario
 from patchgen.simulate import engine_config
@@ -134,6 +137,16 @@ def test_a_run_is_the_same_in_any_block_and_on_any_number_of_threads():
         np.testing.assert_array_equal(getattr(shifted, name), a[37:140], err_msg=name)
         np.testing.assert_array_equal(getattr(single, name), a, err_msg=name)
     np.testing.assert_array_equal(alone.history, full.history)
+
+
+def test_the_kernel_names_the_code_compiled_into_it():
+    """numba's cache of patchgen/kernel.py is stamped with that file alone: a change in lanes.py or
+    noise.py (compiled into it) must change it too, through kernel.COMPILED_IN."""
+    digest = hashlib.sha256()
+    for name in ("lanes.py", "noise.py"):
+        digest.update((ROOT / "patchgen" / name).read_bytes())
+    assert kernel.COMPILED_IN == digest.hexdigest()[:16], (
+        f"lanes.py or noise.py changed: set COMPILED_IN = {digest.hexdigest()[:16]!r} in patchgen/kernel.py")
 
 
 def test_compile_notice_only_when_numba_will_compile(tmp_path):

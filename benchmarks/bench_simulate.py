@@ -12,8 +12,16 @@
    lag removed so that every run lasts the full 60 s (with the real 0.2 s lag every run ends at
    the limit switches within seconds, which would flatter the figure; that case is timed too).
    Peak memory is resource.getrusage's maximum resident set of this process.
+3. Monte-Carlo throughput: 1000 runs of hold-120s on bench-recommended (120 s at 2 ms, noise and
+   drift as the profiles say), in process through patchgen.simulate with numba's cache warm
+   (median of --repeats): ns of CPU per run-step (all threads' CPU time over the run-steps done)
+   and runs per second of wall time; then the whole command `patchgen simulate bench-recommended
+   --scenario hold-120s --runs 1000 -o DIR` in a fresh process (median of --process-repeats),
+   which adds the imports, the design, the plots and the files.
 
-Run: python benchmarks/bench_simulate.py
+The machine's other work shows in every figure: the load average is printed before and after.
+
+Run: python benchmarks/bench_simulate.py [--only accuracy|monte-carlo|throughput]
 """
 
 from __future__ import annotations
@@ -22,6 +30,7 @@ import argparse
 import math
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -51,7 +60,7 @@ MC_RUNS = 1000
 def _inputs():
     net = read_netlist(NETLIST)
     bench, gp6 = load_bench("uw-1991"), load_machine("gp6")
-    base = load_scenario(ROOT / "sims/offset-10deg.toml").model_dump()
+    base = load_scenario("offset-10deg").model_dump()
     sc = Scenario.model_validate({**base, "duration_s": DURATION_S})
     return net, bench, gp6, sc
 
@@ -115,13 +124,27 @@ def first_call_seconds(cache_dir: str | None) -> tuple[float, float]:
     return float(one), float(many)
 
 
-def main() -> None:
-    import control
+def _load() -> str:
+    return "load average " + " ".join(f"{v:.2f}" for v in os.getloadavg())
+
+
+def main(only: str | None, repeats: int, process_repeats: int) -> None:
     import numba
 
+    print(f"machine: {os.cpu_count()} CPUs, numba threads {numba.get_num_threads()}, {_load()}")
+    if only in (None, "accuracy"):
+        accuracy()
+    if only in (None, "monte-carlo"):
+        monte_carlo()
+    if only in (None, "throughput"):
+        throughput(repeats, process_repeats)
+    print(f"\nafter: {_load()}")
+
+
+def accuracy() -> None:
+    import control
+
     net, bench, gp6, sc = _inputs()
-    print(f"machine: {os.cpu_count()} CPUs, numba threads {numba.get_num_threads()}, "
-          f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     with tempfile.TemporaryDirectory() as cold:
         t_cold = first_call_seconds(cold)
     t_cached = first_call_seconds(None)
@@ -173,12 +196,15 @@ def main() -> None:
     print(f"   trajectory difference patchgen - reference: max |d theta| {diff:.2e} rad")
     print(f"   target >= 100x: {'met' if ratio >= 100 else 'NOT met'}")
 
-    # 2. Monte Carlo ----------------------------------------------------------------------------
+
+def monte_carlo() -> None:
+    net, bench, gp6, _ = _inputs()
     rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     no_lag = bench.model_copy(update={"actuator": bench.actuator.model_copy(
         update={"model": "gain", "tau": 0.0})})
     hold = Scenario(name="hold-60s", duration_s=DURATION_S, noise="profile", drift="profile")
-    simulate(net, PLANT, no_lag, gp6, hold, runs=2, keep_history=False)  # warm
+    simulate(net, PLANT, no_lag, gp6, hold.model_copy(update={"duration_s": 1.0}), runs=4 * 64,
+             keep_history=False)  # warm: the parallel entry point, from the cache
     t0, c0 = time.perf_counter(), time.process_time()
     mc = simulate(net, PLANT, no_lag, gp6, hold, runs=MC_RUNS, keep_history=False)
     t_mc, cpu_mc = time.perf_counter() - t0, time.process_time() - c0
@@ -203,6 +229,49 @@ def main() -> None:
           f"{real.distribution.percentiles['trip_time_s']['p50']:.2f} s (runs end at the trip)")
 
 
+def throughput(repeats: int, process_repeats: int) -> None:
+    import numba
+
+    from patchgen.cli.design import design_from_path
+    from patchgen.model import plant_params
+    from patchgen.patch import build_patch
+
+    d, machine = design_from_path("bench-recommended")
+    net, plant = build_patch(d, machine), plant_params(d.spec)
+    bench = load_bench(d.spec.bench, d.spec.path)
+    sc = load_scenario("hold-120s")
+    threads = numba.get_num_threads()
+    simulate(net, plant, bench, machine, sc, runs=1)  # warm: both entry points, from the cache
+    simulate(net, plant, bench, machine, sc.model_copy(update={"duration_s": 1.0}), runs=4 * 64)
+    walls, cpus = [], []
+    for _ in range(repeats):
+        t0, c0 = time.perf_counter(), time.process_time()
+        res = simulate(net, plant, bench, machine, sc, runs=MC_RUNS)  # as the command: run 0's history kept
+        walls.append(time.perf_counter() - t0)
+        cpus.append(time.process_time() - c0)
+    dt = res.settings.dt_s
+    run_steps = sum(round((r.trip_time_s or sc.duration_s) / dt) for r in res.runs)
+    wall, cpu = statistics.median(walls), statistics.median(cpus)
+    print(f"\n3. {MC_RUNS} runs of {sc.name} on {net.design} ({res.settings.steps} steps of "
+          f"{dt * 1e3:g} ms; {run_steps / 1e6:.1f} M run-steps, fraction held "
+          f"{res.distribution.fraction_held:.3f}), {threads} threads, {_load()}")
+    print(f"   in process, cache warm, median of {repeats}: {wall:.2f} s wall "
+          f"(all: {' '.join(f'{w:.2f}' for w in walls)}), {MC_RUNS / wall:.0f} runs/s; "
+          f"{cpu:.2f} s CPU, {cpu / run_steps * 1e9:.0f} ns CPU per run-step")
+    print(f"   target < 5 s: {'met' if wall < 5 else 'NOT met'}")
+    cmd = [sys.executable, "-m", "patchgen", "simulate", "bench-recommended", "--scenario",
+           "hold-120s", "--runs", str(MC_RUNS), "-o"]
+    times = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for k in range(process_repeats):
+            t0 = time.perf_counter()
+            subprocess.run(cmd + [os.path.join(tmp, str(k))], check=True, capture_output=True)
+            times.append(time.perf_counter() - t0)
+    print(f"   whole command (`patchgen simulate bench-recommended --scenario hold-120s --runs "
+          f"{MC_RUNS} -o DIR`), median of {process_repeats}: {statistics.median(times):.2f} s "
+          f"(all: {' '.join(f'{t:.2f}' for t in times)}); {_load()}")
+
+
 def _first_call() -> None:
     net, bench, gp6, sc = _inputs()
     t0 = time.perf_counter()
@@ -215,7 +284,11 @@ def _first_call() -> None:
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--first-call", action="store_true", help=argparse.SUPPRESS)
-    if ap.parse_args().first_call:
+    ap.add_argument("--only", choices=("accuracy", "monte-carlo", "throughput"))
+    ap.add_argument("--repeats", type=int, default=5, help="in-process Monte Carlos (throughput)")
+    ap.add_argument("--process-repeats", type=int, default=3, help="whole commands (throughput)")
+    args = ap.parse_args()
+    if args.first_call:
         _first_call()
     else:
-        main()
+        main(args.only, args.repeats, args.process_repeats)

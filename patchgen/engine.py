@@ -1,5 +1,5 @@
-"""The compiled inner loop: fixed-step RK4 of the nonlinear plant, the actuator and the patched
-circuit, one run per thread (numba ``prange``), per-run summaries and optional histories.
+"""The simulator's engine: fixed-step RK4 of the nonlinear plant, the actuator and the patched
+circuit, runs side by side in blocks (``patchgen.kernel``), per-run summaries and optional histories.
 
 Everything the loop needs arrives as flat float/int arrays (see ``EngineConfig``), so a run is
 ``n_steps`` iterations of: draw the noise held over the step, four RK4 stages of
@@ -22,23 +22,19 @@ mode within 2 % per step there.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 
-import numba as nb
 import numpy as np
 
-from .circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER
-from .plant import PLANT_STATES
+from . import kernel
+from .kernel import DIST_CART_FORCE, DIST_STEP, DIST_TIP_FORCE, LANES  # noqa: F401  (the engine's interface)
+from .lanes import ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, plant_rhs  # noqa: F401
 
 BENCH_DT_S = 0.002
 IDEAL_DT_S = 0.01
 STEPS_PER_TIME_CONSTANT = 1.0
-
-ACT_GAIN, ACT_LAG, ACT_LAG_ZERO = 0, 1, 2
-DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
-# fast-math without the no-NaN/no-infinity assumptions (NaN marks "never", inf "no limit")
-_FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
-S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
+COMPILE_NOTICE = "compiling simulation kernels (first run after installation; cached for later runs)..."
 
 # history channels before the amplifier outputs
 HISTORY_CHANNELS = ("t", "s", "theta", "s_dot", "theta_dot", "s_ref", "u_c", "force")
@@ -127,319 +123,97 @@ class BatchOutput:
 
 def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Each run's random draws, from its own generator: the drift sign of each amplifier, then
-    standard normals (steps + 1, sensors + amplifiers) when any noise is on (float32: noise
-    needs no more, and it halves the memory traffic), then, with a parameter spread, the run's
-    plant. Drawn by numpy outside the compiled loop: its bulk normals are fast, and a run's
-    draws do not depend on threads or batches."""
+    """Each run's random draws, from its own generator: the drift sign of each amplifier, the
+    two 32-bit words that key its noise (drawn in the compiled loop, see patchgen.kernel), then,
+    with a parameter spread, the run's plant. A run's draws depend on nothing but its generator."""
     runs = len(rngs)
     n_amp = len(cfg.amp_kind)
-    noisy = bool(cfg.sensor_noise_std.any() or cfg.amp_noise_std.any())
     signs = np.empty((runs, n_amp))
-    shape = (runs, cfg.n_steps + 1, len(cfg.sensor_state) + n_amp) if noisy else (runs, 0, 0)
-    gauss = np.empty(shape, dtype=np.float32)
+    keys = np.empty((runs, 2), dtype=np.uint64)
     plants = np.repeat(cfg.plant[None, :], runs, axis=0)
     spread = cfg.plant_spread.any()
     for r, rng in enumerate(rngs):
         signs[r] = np.where(rng.random(n_amp) < 0.5, 1.0, -1.0)
-        if noisy:
-            rng.standard_normal(out=gauss[r], dtype=np.float32)
+        keys[r] = rng.integers(0, 2**32, size=2, dtype=np.uint64)
         if spread:
             plants[r] *= 1.0 + cfg.plant_spread * rng.uniform(-1.0, 1.0, cfg.plant.shape[0])
-    return signs, gauss, plants
+    return signs, keys, plants
+
+
+def kernel_args(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray, np.ndarray],
+                out: dict[str, np.ndarray]) -> tuple:
+    """The compiled loop's arguments for ``draws`` (see draw_batch), writing into ``out``."""
+    signs, keys, plants = draws
+    fpar = np.zeros(7)
+    fpar[[kernel.F_DT, kernel.F_SAT, kernel.F_K_U, kernel.F_TAU, kernel.F_DEAD, kernel.F_FLIM,
+          kernel.F_FALL]] = (cfg.dt, cfg.saturation_V, cfg.K_U, cfg.tau, cfg.dead_zone_V,
+                             cfg.force_limit_N, cfg.fall_angle)
+    ipar = np.zeros(6, dtype=np.int64)
+    ipar[[kernel.I_STEPS, kernel.I_STRIDE, kernel.I_LIMIT, kernel.I_CLIP, kernel.I_OUT,
+          kernel.I_ACT]] = (cfg.n_steps, cfg.stride, cfg.limit_switches, cfg.clip,
+                            cfg.output_index, cfg.actuator)
+    f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)
+    i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)
+    return (keys, f64(signs), f64(plants), fpar, ipar, f64(cfg.x0), i64(cfg.sensor_state),
+            f64(cfg.sensor_gain), f64(np.concatenate([cfg.sensor_noise_a, cfg.amp_noise_a])),
+            f64(np.concatenate([cfg.sensor_noise_std, cfg.amp_noise_std])),
+            i64(cfg.amp_kind), i64(cfg.in_ptr), i64(cfg.in_src), f64(cfg.in_gain), f64(cfg.param1),
+            f64(cfg.param2), f64(cfg.ic_V), f64(cfg.drift), i64(cfg.dist_kind), f64(cfg.dist_t0),
+            f64(cfg.dist_t1), f64(cfg.dist_value), out["res"], out["ovl_first"], out["ovl_time"],
+            out["hist"], out["hist_len"])
 
 
 def run_batch(cfg: EngineConfig, draws: tuple[np.ndarray, np.ndarray, np.ndarray],
               n_history: int) -> BatchOutput:
-    """One run per row of ``draws`` (see draw_batch), in parallel threads, without the GIL;
-    histories for the first n_history runs."""
-    signs, gauss, plants = draws
-    runs, n_amp = signs.shape
+    """One run per row of ``draws`` (see draw_batch), in blocks of LANES runs side by side, the
+    blocks in parallel threads without the GIL; histories for the first n_history runs."""
+    runs, n_amp = draws[0].shape
     n_samples = cfg.n_steps // cfg.stride + 2  # stride samples, and the last one off-stride
-    out = BatchOutput(
-        trip_time=np.full(runs, np.nan), fall_time=np.full(runs, np.nan),
-        max_abs_theta=np.zeros(runs), max_abs_s=np.zeros(runs), rms_theta=np.zeros(runs),
-        max_abs_u_c=np.zeros(runs), max_abs_force=np.zeros(runs),
-        overload_first=np.full((runs, n_amp), np.nan), overload_time=np.zeros((runs, n_amp)),
-        final_state=np.zeros((runs, 4)),
-        history=np.zeros((n_history, n_samples, len(HISTORY_CHANNELS) + n_amp)),
-        history_length=np.zeros(n_history, dtype=np.int64),
-    )
-    args = (cfg.dt, cfg.n_steps, cfg.stride, cfg.x0, cfg.limit_switches,
-            cfg.sensor_state, cfg.sensor_gain, cfg.sensor_noise_a, cfg.sensor_noise_std,
-            cfg.amp_kind, cfg.in_ptr, cfg.in_src, cfg.in_gain, cfg.param1, cfg.param2, cfg.ic_V,
-            cfg.drift, cfg.amp_noise_a, cfg.amp_noise_std, cfg.saturation_V, cfg.clip,
-            cfg.output_index, cfg.actuator, cfg.K_U, cfg.tau, cfg.dead_zone_V, cfg.force_limit_N,
-            cfg.dist_kind, cfg.dist_t0, cfg.dist_t1, cfg.dist_value, cfg.fall_angle,
-            out.trip_time, out.fall_time, out.max_abs_theta, out.max_abs_s, out.rms_theta,
-            out.max_abs_u_c, out.max_abs_force, out.overload_first, out.overload_time,
-            out.final_state, out.history, out.history_length)
-    if runs == 1:  # no thread launch: it costs more than a lone run on a busy machine
-        _one_run(0, signs[0], gauss[0], args[0], args[1], args[2], args[3], plants[0], *args[4:])
+    res = np.zeros((runs, kernel.N_RESULTS))
+    res[:, [kernel.R_TRIP, kernel.R_FALL]] = np.nan
+    out = {"res": res, "ovl_first": np.full((runs, n_amp), np.nan), "ovl_time": np.zeros((runs, n_amp)),
+           "hist": np.zeros((n_history, n_samples, len(HISTORY_CHANNELS) + n_amp)),
+           "hist_len": np.zeros(n_history, dtype=np.int64)}
+    args = kernel_args(cfg, draws, out)
+    if runs <= LANES:  # one block: no thread launch, it costs more than the block on a busy machine
+        _notice_if_compiling(kernel.run_block, (0, runs) + args)
+        kernel.run_block(0, runs, *args)
     else:
-        _batch(signs, gauss, plants, *args)
-    return out
+        _notice_if_compiling(kernel.run_blocks, args)
+        kernel.run_blocks(*args)
+    return BatchOutput(
+        trip_time=res[:, kernel.R_TRIP], fall_time=res[:, kernel.R_FALL],
+        max_abs_theta=res[:, kernel.R_MAX_TH], max_abs_s=res[:, kernel.R_MAX_S],
+        rms_theta=res[:, kernel.R_RMS_TH], max_abs_u_c=res[:, kernel.R_MAX_UC],
+        max_abs_force=res[:, kernel.R_MAX_F], overload_first=out["ovl_first"],
+        overload_time=out["ovl_time"], final_state=res[:, kernel.R_FINAL:kernel.R_FINAL + 4],
+        history=out["hist"], history_length=out["hist_len"],
+    )
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def plant_rhs(p, th, sd, thd, force, tip_force):
-    """Eq. 2.16-2.19 (as patchgen.plant.nonlinear_rhs) plus a horizontal force at the pendulum
-    tip (distance l): generalised forces tip_force on s and tip_force * l * cos(theta) on theta.
-    Returns (ds, dtheta, ds_dot, dtheta_dot); p = (M, m, l, g, b_VF, c, ...)."""
-    M, m, l, g, b, c = p[0], p[1], p[2], p[3], p[4], p[5]
-    sn, cs = math.sin(th), math.cos(th)
-    den = (M + m) - m * cs * cs
-    bracket = -b * sd + m * l * thd * thd * sn + (c / l) * thd * cs - m * g * sn * cs + force
-    sdd = (bracket + tip_force * sn * sn) / den
-    thdd = -c / (m * l * l) * thd + g / l * sn + tip_force * cs / (m * l) - cs * sdd / l
-    return sd, thd, sdd, thdd
+def will_compile(dispatcher, args: tuple) -> bool:
+    """Whether calling ``dispatcher`` with ``args`` is going to compile it: not yet compiled in
+    this process for these argument types, and not in numba's disk cache for this source, this
+    machine and this bytecode (numba's own index key). False when numba's cache layout is not
+    the one this reads: then nothing is claimed."""
+    try:
+        sig = tuple(dispatcher.typeof_pyval(a) for a in args)
+        if sig in dispatcher.overloads:
+            return False
+        cache = dispatcher._cache
+        key = cache._index_key(sig, dispatcher.targetctx.codegen())
+        return key not in cache._cache_file._load_index()
+    except Exception:  # numba internals moved: better silent than wrong
+        return False
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
-def _rail(out, sat, clip):
-    """An amplifier output held inside the rails (when clipping is on)."""
-    if clip:
-        if out > sat:
-            return sat
-        if out < -sat:
-            return -sat
-    return out
+_noticed = False
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_ptr, in_src,
-             in_gain, param1, param2, drift, sat, clip, sig, raw, dz_out):
-    """Evaluate sensors and amplifiers in order: sig (clipped if clip), raw (before clipping),
-    and the amplifier state derivatives into dz_out."""
-    ns = sensor_state.shape[0]
-    for i in range(ns):
-        q = xt[sensor_state[i]]
-        if sensor_state[i] == S_INDEX:
-            q -= s_ref
-        sig[i] = sensor_gain[i] * q + nz_s[i]
-    na = amp_kind.shape[0]
-    # outputs in evaluation order (the compiler puts integrators and lags, whose outputs are their
-    # states, before everything that reads them)
-    for j in range(na):
-        kd = amp_kind[j]
-        if kd == INTEGRATOR or kd == LAG:
-            out = zt[j]
-        else:
-            acc = 0.0
-            for k in range(in_ptr[j], in_ptr[j + 1]):
-                acc += in_gain[k] * sig[in_src[k]]
-            if kd == SUMMER:
-                out = -acc
-                dz_out[j] = 0.0
-            else:  # DIFFERENTIATOR with roll-off
-                out = -param1[j] * (acc - zt[j])
-                dz_out[j] = param2[j] * (acc - zt[j])
-        out += nz_a[j]
-        raw[j] = out
-        sig[ns + j] = _rail(out, sat, clip)
-    # last, the integrating amplifiers' inputs, now that every signal of this instant is known
-    for j in range(na):
-        kd = amp_kind[j]
-        if kd == INTEGRATOR or kd == LAG:
-            acc = 0.0
-            for k in range(in_ptr[j], in_ptr[j + 1]):
-                acc += in_gain[k] * sig[in_src[k]]
-            if kd == INTEGRATOR:
-                dz_out[j] = -param1[j] * acc + drift[j]
-            else:
-                dz_out[j] = param1[j] * (-acc - zt[j]) + drift[j]
-    return 0
-
-
-@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
-             sensor_state, sensor_gain, sna, sns,
-             amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,
-             out_index, act, K_U, tau, dz, flim,
-             dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
-             trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final,
-             hist, hist_len):
-    ns = sensor_state.shape[0]
-    na = amp_kind.shape[0]
-    half = p[6]
-    noisy = gauss.shape[0] > 0
-    drift = drift_mag * sign  # each integrating amplifier drifts one way, drawn per run
-    nz_s = np.zeros(ns)
-    nz_a = np.zeros(na)
-    if noisy:  # start the noise in its stationary distribution
-        for i in range(ns):
-            nz_s[i] = gauss[0, i] * sns[i] / math.sqrt(1.0 - sna[i] * sna[i])
-        for j in range(na):
-            nz_a[j] = gauss[0, ns + j] * ans[j] / math.sqrt(1.0 - ana[j] * ana[j])
-    xp = x0.copy()
-    za = ic.copy()
-    sig = np.zeros(ns + na)
-    raw = np.zeros(na)
-    kp = np.zeros((4, 4))  # RK4 slopes of the plant, amplifier and actuator states
-    ka = np.zeros((4, na))
-    kx = np.zeros(4)
-    xt = np.zeros(4)
-    zt = np.zeros(na)
-    # a differentiator starts settled on its input (the angle was held before the run): set its
-    # filter state to its input, in evaluation order (one pass per amplifier reaches every chain)
-    quiet_s = np.zeros(ns)
-    quiet_a = np.zeros(na)
-    for _ in range(na):
-        _circuit(xp, za, 0.0, quiet_s, quiet_a, sensor_state, sensor_gain, amp_kind, in_ptr,
-                 in_src, in_gain, param1, param2, drift, sat, False, sig, raw, zt)
-        for j in range(na):
-            if amp_kind[j] == DIFFERENTIATOR:
-                za[j] -= raw[j] / param1[j]
-    xa = 0.0
-    tripped = False
-    fallen = False
-    pinned = np.zeros(na, dtype=np.bool_)  # clipped at a rail by the last update
-    sum_th2 = 0.0
-    mth = 0.0
-    ms = 0.0
-    muc = 0.0
-    mf = 0.0
-    sample = 0
-    n = 0
-    for n in range(n_steps + 1):
-        t = n * h
-        if noisy and n > 0:  # new noise for this step
-            for i in range(ns):
-                nz_s[i] = sna[i] * nz_s[i] + sns[i] * gauss[n, i]
-            for j in range(na):
-                nz_a[j] = ana[j] * nz_a[j] + ans[j] * gauss[n, ns + j]
-        # disturbances averaged over the step (so an impulse keeps its area at any step)
-        f_cart = 0.0
-        f_tip = 0.0
-        s_ref = 0.0
-        for k in range(dist_kind.shape[0]):
-            overlap = min(t + h, dist_t1[k]) - max(t, dist_t0[k])
-            if overlap > 0.0:
-                v = dist_value[k] * overlap / h
-                if dist_kind[k] == DIST_CART_FORCE:
-                    f_cart += v
-                elif dist_kind[k] == DIST_TIP_FORCE:
-                    f_tip += v
-                else:
-                    s_ref += v
-        force0 = 0.0
-        last = False
-        for st in range(4):
-            if st == 0:
-                for i in range(4):
-                    xt[i] = xp[i]
-                for j in range(na):
-                    zt[j] = za[j]
-                xat = xa
-            else:
-                c = h if st == 3 else 0.5 * h
-                for i in range(4):
-                    xt[i] = xp[i] + c * kp[st - 1, i]
-                for j in range(na):
-                    zt[j] = za[j] + c * ka[st - 1, j]
-                xat = xa + c * kx[st - 1]
-            _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_ptr,
-                     in_src, in_gain, param1, param2, drift, sat, clip, sig, raw, ka[st])
-            uc = sig[out_index]
-            v = 0.0
-            if uc > dz:
-                v = uc - dz
-            elif uc < -dz:
-                v = uc + dz
-            if act == ACT_GAIN:
-                force = K_U * v
-                kx[st] = 0.0
-            elif act == ACT_LAG:
-                force = xat
-                kx[st] = (K_U * v - xat) / tau
-            else:
-                force = K_U / tau * (v - xat)
-                kx[st] = (v - xat) / tau
-            if force > flim:
-                force = flim
-            elif force < -flim:
-                force = -flim
-            if tripped:
-                force = 0.0
-            d0, d1, d2, d3 = plant_rhs(p, xt[1], xt[2], xt[3], force + f_cart, f_tip)
-            kp[st, 0] = d0
-            kp[st, 1] = d1
-            kp[st, 2] = d2
-            kp[st, 3] = d3
-            if st > 0:
-                continue
-            # summaries at time t (state and signals of the step's first stage); the run ends
-            # at the end of the scenario or when the limit switches have cut the motor
-            force0 = force
-            last = n == n_steps or tripped
-            th = xp[1]
-            sum_th2 += th * th
-            mth = max(mth, abs(th))
-            ms = max(ms, abs(xp[0]))
-            muc = max(muc, abs(uc))
-            mf = max(mf, abs(force))
-            if not fallen and abs(th) > fall_angle:
-                fallen = True
-                fall_t[r] = t
-            for j in range(na):
-                if abs(raw[j]) > sat or pinned[j]:
-                    if math.isnan(ovl_first[r, j]):
-                        ovl_first[r, j] = t
-                    if not last:
-                        ovl_time[r, j] += h
-            if r < hist.shape[0] and (n % stride == 0 or last):
-                hist[r, sample, 0] = t
-                for i in range(4):
-                    hist[r, sample, 1 + i] = xp[i]
-                hist[r, sample, 5] = s_ref
-                hist[r, sample, 6] = uc
-                hist[r, sample, 7] = force0
-                for j in range(na):
-                    hist[r, sample, 8 + j] = sig[ns + j]
-                sample += 1
-                hist_len[r] = sample
-            if last:
-                break
-        if last:
-            break
-        for i in range(4):
-            xp[i] += h / 6.0 * (kp[0, i] + 2.0 * kp[1, i] + 2.0 * kp[2, i] + kp[3, i])
-        for j in range(na):
-            za[j] += h / 6.0 * (ka[0, j] + 2.0 * ka[1, j] + 2.0 * ka[2, j] + ka[3, j])
-            pinned[j] = False
-            if clip and amp_kind[j] != DIFFERENTIATOR:  # a capacitor cannot charge past the rails
-                if za[j] > sat:
-                    za[j] = sat
-                    pinned[j] = True
-                elif za[j] < -sat:
-                    za[j] = -sat
-                    pinned[j] = True
-        xa += h / 6.0 * (kx[0] + 2.0 * kx[1] + 2.0 * kx[2] + kx[3])
-        if limit_on and not tripped and abs(xp[0]) >= half:
-            tripped = True
-            trip_t[r] = t + h
-    max_th[r] = mth
-    max_s[r] = ms
-    rms_th[r] = math.sqrt(sum_th2 / (n + 1))
-    max_uc[r] = muc
-    max_f[r] = mf
-    for i in range(4):
-        final[r, i] = xp[i]
-
-
-@nb.njit(cache=True, parallel=True, nogil=True, error_model="numpy", fastmath=_FAST)
-def _batch(signs, gauss, plants, h, n_steps, stride, x0, limit_on,
-           sensor_state, sensor_gain, sna, sns,
-           amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,
-           out_index, act, K_U, tau, dz, flim,
-           dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
-           trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final, hist,
-           hist_len):
-    for r in nb.prange(signs.shape[0]):
-        _one_run(r, signs[r], gauss[r], h, n_steps, stride, x0, plants[r], limit_on,
-                 sensor_state, sensor_gain, sna, sns,
-                 amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat,
-                 clip, out_index, act, K_U, tau, dz, flim,
-                 dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
-                 trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final,
-                 hist, hist_len)
+def _notice_if_compiling(dispatcher, args: tuple) -> None:
+    """One line on stderr (once per process) before a first call that compiles: it takes a
+    while, once per installation."""
+    global _noticed
+    if not _noticed and will_compile(dispatcher, args):
+        _noticed = True
+        print(COMPILE_NOTICE, file=sys.stderr, flush=True)

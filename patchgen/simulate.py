@@ -23,7 +23,6 @@ import io
 import json
 import math
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -40,6 +39,7 @@ from .engine import (
     DIST_STEP,
     DIST_TIP_FORCE,
     HISTORY_CHANNELS,
+    LANES,
     EngineConfig,
     default_step,
     draw_batch,
@@ -53,7 +53,6 @@ from .plant import PlantParams
 from .scenario import Scenario
 
 PERCENTILES = (5, 50, 95)
-BATCH_NOISE_BYTES = 64 * 2**20  # noise drawn ahead per batch of runs (two batches live at once)
 
 IDEAL_MEANING = (
     "no sensor or amplifier noise, no integrator drift, no saturation (overloads still recorded), "
@@ -166,9 +165,10 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     ``spread`` (e.g. {"M": 0.1, "l": 0.1}) draws each run's plant parameters uniformly within
     those fractions of the nominal: the Monte Carlo then covers model error as well as noise.
 
-    Run i draws from ``numpy.random.default_rng([seed, i])``, so run 0 of a Monte Carlo is the
-    single run of the same seed. ``keep_history`` keeps the first run's time histories.
-    ``progress`` is called with the number of runs done after each batch.
+    Run i draws from ``numpy.random.default_rng([seed, i])`` (drift signs, the key of its
+    counter-based noise, its plant), so run 0 of a Monte Carlo is the single run of the same seed.
+    ``keep_history`` keeps the first run's time histories. ``progress`` is called with the
+    number of runs done after each batch.
     """
     if runs < 1:
         raise InputError("--runs", "", f"must be at least 1 (got {runs})")
@@ -178,28 +178,16 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
         raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")
     cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal, spread=spread)
 
-    # batches of runs: enough for the threads, few progress calls, bounded noise memory
-    per_run = (cfg.n_steps + 1) * (circuit.n_sensors + circuit.n_amps) * 4
-    chunk = max(2 * numba.get_num_threads(),
-                min(math.ceil(runs / 20), BATCH_NOISE_BYTES // per_run))
-    starts = range(0, runs, chunk)
-
-    def draws(start: int):
-        return draw_batch(cfg, [np.random.default_rng([base_seed, i])
-                                for i in range(start, min(start + chunk, runs))])
-
+    # batches of runs, for the progress calls: whole blocks, enough of them for the threads
+    per_call = LANES * numba.get_num_threads()
+    chunk = per_call * max(1, math.ceil(runs / 20 / per_call))
     parts = []
-    with ThreadPoolExecutor(max_workers=1) as pool:  # next batch's draws while this one runs
-        pending = None
-        batch = draws(starts[0])
-        for k, start in enumerate(starts):
-            if pending is not None:
-                batch = pending.result()
-            if k + 1 < len(starts):
-                pending = pool.submit(draws, starts[k + 1])
-            parts.append(run_batch(cfg, batch, 1 if keep_history and start == 0 else 0))
-            if progress is not None:
-                progress(min(start + chunk, runs))
+    for start in range(0, runs, chunk):
+        stop = min(start + chunk, runs)
+        draws = draw_batch(cfg, [np.random.default_rng([base_seed, i]) for i in range(start, stop)])
+        parts.append(run_batch(cfg, draws, 1 if keep_history and start == 0 else 0))
+        if progress is not None:
+            progress(stop)
 
     def cat(name: str) -> np.ndarray:
         return np.concatenate([getattr(p, name) for p in parts])

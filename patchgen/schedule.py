@@ -22,8 +22,8 @@ import numba as nb
 import numpy as np
 from scipy.optimize import minimize
 
-from .engine import plant_rhs
 from .handoff import Zone, wrapped
+from .lanes import N_COEF, plant_accel, plant_coefficients, sincos
 from .plant import PlantParams
 from .swingup import (
     Schedule,
@@ -86,9 +86,18 @@ def _batch_terminal(
                             np.asarray(T_F, dtype=float), float(h), hanging_state().astype(float))
 
 
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def _rhs(q, th, sd, thd, u):
+    sn, cs = sincos(th)
+    sdd, thdd = plant_accel(q, 0, sn, cs, sd, thd, u, 0.0)
+    return sd, thd, sdd, thdd
+
+
 @nb.njit(cache=True, error_model="numpy")
 def _terminal_kernel(p, starts, forces, T_F, h, x0):
     n, B = starts.shape
+    q = np.empty((N_COEF, 1))
+    plant_coefficients(p, q[:, 0])
     x_T = np.zeros((4, B))
     s_max = np.zeros(B)
     for b in range(B):
@@ -101,17 +110,17 @@ def _terminal_kernel(p, starts, forces, T_F, h, x0):
                 end = starts[j + 1, b] if j + 1 < n else np.inf
                 u += forces[j] * max(min(end, t0 + h) - max(starts[j, b], t0), 0.0)
             u /= h
-            a0, a1, a2, a3 = plant_rhs(p, th, sd, thd, u, 0.0)
-            b0, b1, b2, b3 = plant_rhs(p, th + 0.5 * h * a1, sd + 0.5 * h * a2, thd + 0.5 * h * a3, u, 0.0)
-            c0, c1, c2, c3 = plant_rhs(p, th + 0.5 * h * b1, sd + 0.5 * h * b2, thd + 0.5 * h * b3, u, 0.0)
-            d0, d1, d2, d3 = plant_rhs(p, th + h * c1, sd + h * c2, thd + h * c3, u, 0.0)
+            a0, a1, a2, a3 = _rhs(q, th, sd, thd, u)
+            b0, b1, b2, b3 = _rhs(q, th + 0.5 * h * a1, sd + 0.5 * h * a2, thd + 0.5 * h * a3, u)
+            c0, c1, c2, c3 = _rhs(q, th + 0.5 * h * b1, sd + 0.5 * h * b2, thd + 0.5 * h * b3, u)
+            d0, d1, d2, d3 = _rhs(q, th + h * c1, sd + h * c2, thd + h * c3, u)
             s1 = s + (h / 6.0) * (a0 + 2.0 * b0 + 2.0 * c0 + d0)
             th1 = th + (h / 6.0) * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
             sd1 = sd + (h / 6.0) * (a2 + 2.0 * b2 + 2.0 * c2 + d2)
             thd1 = thd + (h / 6.0) * (a3 + 2.0 * b3 + 2.0 * c3 + d3)
             s_max[b] = max(s_max[b], abs(s))
             if k == k_T:  # cubic Hermite between the grid points, slopes f(x) and f(x1)
-                e0, e1, e2, e3 = plant_rhs(p, th1, sd1, thd1, u, 0.0)
+                e0, e1, e2, e3 = _rhs(q, th1, sd1, thd1, u)
                 tau = T_F[b] / h - k
                 h00 = 2 * tau**3 - 3 * tau**2 + 1
                 h10 = tau**3 - 2 * tau**2 + tau

@@ -62,16 +62,17 @@ def _controller(d: Design) -> tuple[Controller, tuple[str, ...]]:
     return _state_feedback_controller(d), _plant_part(d)[1]
 
 
-def plant_ss(design: Design, outputs: tuple[str, ...] | None = None) -> control.StateSpace:
+def plant_ss(design: Design, outputs: str | tuple[str, ...] | None = None) -> control.StateSpace:
     """The plant the compensator drives, as a named ``control.StateSpace``.
 
     Parameters
     ----------
     design : Design
         A design from :func:`patchgen.design.design` or :func:`load_design`.
-    outputs : tuple of str, optional
-        Plant states to output. By default the signals the compensator reads: s, theta, s_dot
-        when the design has an estimator, every plant state for plain state feedback.
+    outputs : str or tuple of str, optional
+        Plant states to output (``"s"`` for the transfer function s/u, say). By default the
+        signals the compensator reads: s, theta, s_dot when the design has an estimator, every
+        plant state for plain state feedback.
 
     Returns
     -------
@@ -88,7 +89,9 @@ def plant_ss(design: Design, outputs: tuple[str, ...] | None = None) -> control.
     import control
 
     keep, names = _plant_part(design)
-    outputs = _controller(design)[1] if outputs is None else tuple(outputs)
+    if outputs is None:
+        outputs = _controller(design)[1]
+    outputs = (outputs,) if isinstance(outputs, str) else tuple(outputs)
     unknown = [o for o in outputs if o not in names]
     if unknown:
         raise ValueError(f"not plant states: {', '.join(unknown)} (plant states: {', '.join(names)})")
@@ -112,8 +115,9 @@ def compensator_ss(design: Design) -> control.StateSpace:
     Returns
     -------
     control.StateSpace
-        Inputs: s, theta, s_dot for a Kalman estimator (LQG with the integrators of s and theta),
-        a differentiator or a reduced observer; every plant state for plain state feedback.
+        Inputs: s, theta, s_dot for a Kalman estimator, a differentiator or a reduced observer
+        (each with the integrators of the spec's integral states); every plant state for plain
+        state feedback.
         Output ``u``, the force on the cart in newtons *including* the minus sign of u = -K x, so
         the closed loop is ``control.feedback(plant_ss(d), compensator_ss(d), sign=+1)``.
         States named as the design names them (``xhat_*`` estimates, ``int_*`` integrators,
@@ -137,8 +141,8 @@ def loop_ss(design: Design, law: Literal["compensator", "lqr"] | None = None) ->
         ``"lqr"``: the full state feedback u = -K x on the design model (integral and actuator
         states included), the loop of ``design.lqr_margins``. ``"compensator"``: the law as
         implemented (Kalman estimator after loop transfer recovery, differentiator or observer),
-        the loop of ``design.lqg_margins``. By default the compensator when the design has an
-        estimator, else the LQR loop.
+        the loop of ``design.lqg_margins``. By default the compensator; a design without an
+        estimator has no other law than the state feedback, and both give its LQR loop.
 
     Returns
     -------
@@ -151,11 +155,13 @@ def loop_ss(design: Design, law: Literal["compensator", "lqr"] | None = None) ->
     """
     import control
 
-    law = law or ("compensator" if design.controller is not None else "lqr")
+    law = law or "compensator"
     if law not in ("compensator", "lqr"):
         raise ValueError(f"law must be 'compensator' or 'lqr' (got {law!r})")
+    if design.controller is None:
+        law = "lqr"
     model = design.model
-    if law == "lqr" or design.controller is None:
+    if law == "lqr":
         A, B, C, states = model.A, model.B, design.K, model.states
     else:
         A, B, C = loop_with_controller(model, design.controller)

@@ -238,7 +238,7 @@ def test_thesis_case1_figures_with_control():
     _match(ct.feedback(lqr, 1).poles(),
            [-22.2917, -1.7309 + 1.2205j, -1.7309 - 1.2205j, -0.8667 + 0.5163j, -0.8667 - 0.5163j, -0.00001],
            rtol=5e-5)
-    np.testing.assert_allclose(np.sort(ct.zeros(patchgen.plant_ss(d, ("s",))).real), [-4.7896, 4.7729], atol=5e-5)
+    np.testing.assert_allclose(np.sort(ct.zeros(patchgen.plant_ss(d, "s")).real), [-4.7896, 4.7729], atol=5e-5)
     gm, pm, *_ = ct.stability_margins(lqr)
     assert gm == pytest.approx(0.2757, abs=5e-5)
     assert 20 * math.log10(gm) == pytest.approx(-11.19, abs=5e-3)

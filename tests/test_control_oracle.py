@@ -83,7 +83,7 @@ def _loops():
     return out + [("thesis-case1", "compensator", 1.0)]
 
 
-def _reported(d, law, rho):
+def _reported(d, law):
     return d.lqr_margins if law == "lqr" else d.lqg_margins
 
 
@@ -163,7 +163,7 @@ def test_margins_agree_with_control_stability_margins(name, law, rho, method):
     d = _design(name, rho)
     L = patchgen.loop_ss(d, law)
     got = _control_margins(L, method)
-    want = _reported(d, law, rho)
+    want = _reported(d, law)
     assert want.stable and _stable(ct.feedback(L, 1))
     for key in ("lower_gm", "upper_gm", "pm_freq", "delay_margin_s"):
         w, g = getattr(want, key), got[key]
@@ -180,7 +180,7 @@ def test_gain_margins_are_stability_limits(name, law, rho):
     """Just inside each reported limit the loop closed by python-control is stable, just outside
     unstable; with no limit it stays stable at 1e-3 and 1e3 times the gain."""
     d = _design(name, rho)
-    L, m = patchgen.loop_ss(d, law), _reported(d, law, rho)
+    L, m = patchgen.loop_ss(d, law), _reported(d, law)
     for limit, far in ((m.lower_gm, 1e-3), (m.upper_gm, 1e3)):
         if limit is None:
             assert _stable(ct.feedback(far * L, 1))
@@ -250,6 +250,13 @@ def test_thesis_case1_figures_with_control():
     rho1 = _control_margins(patchgen.loop_ss(_design("thesis-case1", 1.0)), "poly")
     assert 20 * math.log10(rho1["upper_gm"]) == pytest.approx(1.03, abs=5e-3)
     assert rho1["pm_deg"] == pytest.approx(5.7, abs=0.05)
+
+
+def test_rho_override_is_the_reported_lqg_before_recovery():
+    """load_design(rho=1) gives the loop whose margins the rho = 10^k design reports as margins_rho1."""
+    before, after = _design("thesis-case1", 1.0).lqg_margins, _design("thesis-case1").estimator.margins_rho1
+    for key in ("lower_gm", "upper_gm", "pm_deg", "pm_freq"):
+        assert getattr(before, key) == pytest.approx(getattr(after, key), rel=1e-12), key
 
 
 def _variant(base: str, **estimator):

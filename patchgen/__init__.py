@@ -1,3 +1,37 @@
-"""patchgen: from an optimal cart-pendulum controller to a checked Comdyna GP-6 patch."""
+"""patchgen: from an optimal cart-pendulum controller to a checked Comdyna GP-6 patch.
+
+The Python API (docs/api.md) is loaded on first use, so ``import patchgen`` stays cheap:
+
+- :func:`load_design` a shipped design by name, a spec file or a spec, designed;
+- :func:`plant_ss`, :func:`compensator_ss`, :func:`loop_ss`, :func:`closed_loop_ss` that design
+  as ``control.StateSpace`` objects with named signals.
+"""
 
 __version__ = "0.2.0"
+
+_LAZY = {
+    "load_design": "patchgen.lti",
+    "plant_ss": "patchgen.lti",
+    "compensator_ss": "patchgen.lti",
+    "loop_ss": "patchgen.lti",
+    "closed_loop_ss": "patchgen.lti",
+    "load_spec": "patchgen.spec",
+    "design": "patchgen.design",
+}
+
+__all__ = ["__version__", *_LAZY]
+
+
+def __getattr__(name: str):
+    """Import a public name's module when the name is first used."""
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'patchgen' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

@@ -6,7 +6,6 @@ import sys
 
 import click
 import pytest
-from click.utils import make_default_short_help
 
 from patchgen.cli import COMMANDS, SUMMARIES, cli
 
@@ -17,7 +16,7 @@ HEAVY = ("numpy", "scipy", "numba", "matplotlib", "schemdraw", "pydantic", "rich
 def test_summary_is_the_commands_own_short_help(name):
     cmd = cli.get_command(click.Context(cli), name)
     for limit in range(20, 400, 7):
-        assert make_default_short_help(SUMMARIES[name], limit) == cmd.get_short_help_str(limit)
+        assert click.Command(name, help=SUMMARIES[name]).get_short_help_str(limit) == cmd.get_short_help_str(limit)
 
 
 @pytest.mark.parametrize("args", [["--help"], ["--version"]])

@@ -6,7 +6,6 @@ import importlib
 import sys
 
 import click
-from click.utils import make_default_short_help
 
 from .. import __version__
 from ..errors import InputError
@@ -49,8 +48,8 @@ class _Group(click.Group):
         """The command list from SUMMARIES, as click would write it from the loaded commands."""
         names = self.list_commands(ctx)
         limit = formatter.width - 6 - max(len(n) for n in names)
-        rows = [(n, self.commands[n].get_short_help_str(limit) if n in self.commands
-                 else make_default_short_help(SUMMARIES[n], limit)) for n in names]
+        cmds = [self.commands.get(n) or click.Command(n, help=SUMMARIES[n]) for n in names]
+        rows = [(n, c.get_short_help_str(limit)) for n, c in zip(names, cmds)]
         with formatter.section("Commands"):
             formatter.write_dl(rows)
 

@@ -385,9 +385,10 @@ _UNITS = {"t": "s", "s": "m", "theta": "rad", "s_dot": "m_per_s", "theta_dot": "
           "s_ref": "m", "u_c": "V", "force": "N"}
 
 
-def write_outputs(result: SimResult, out_dir: str | Path) -> list[Path]:
+def write_outputs(result: SimResult, out_dir: str | Path, svg: bool = False) -> list[Path]:
     """Write history.csv (first run), runs.csv (one line per run), summary.json (sorted keys)
-    and history.png / history.svg plots; same result -> same bytes. Returns the paths."""
+    and the history.png plot (and history.svg with ``svg``); same result -> same bytes.
+    Returns the paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = []
@@ -420,7 +421,7 @@ def write_outputs(result: SimResult, out_dir: str | Path) -> list[Path]:
     path.write_text(json.dumps(result.summary(), indent=2, sort_keys=True) + "\n")
     written.append(path)
     if result.history is not None:
-        written += _plot(result, out)
+        written += _plot(result, out, svg)
     return written
 
 
@@ -428,26 +429,33 @@ def _num(v: float | None) -> str:
     return "" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.9g}"
 
 
-def _plot(result: SimResult, out: Path) -> list[Path]:
+def _plot(result: SimResult, out: Path, svg: bool = False) -> list[Path]:
+    """The first run's histories, a panel each; u_c shares the panel of the amplifier that
+    makes it (the same trace), with the rails."""
     import matplotlib
-    from matplotlib.figure import Figure
+
+    from . import plotting
 
     h = result.history
     t = h["t"]
     first = result.runs[0]
     sat = result.settings.saturation_V
+    out_amp = [a for a in result.amplifiers if np.array_equal(h[a], h["u_c"])][:1]
     panels = [("s (m)", [("s", h["s"]), ("s_ref", h["s_ref"])], None),
               ("theta (deg)", [("theta", np.degrees(h["theta"]))], None),
-              ("u_c (V)", [("u_c", h["u_c"])], None),
+              (f"u_c = {out_amp[0]} (V)" if out_amp else "u_c (V)", [("u_c", h["u_c"])], sat if out_amp else None),
               ("force (N)", [("force", h["force"])], None)]
-    panels += [(f"{a} (V)", [(a, h[a])], sat) for a in result.amplifiers]
-    with matplotlib.rc_context({"svg.hashsalt": "patchgen", "svg.fonttype": "path",
-                                "font.size": 8}):
-        fig = Figure(figsize=(8.0, 1.5 * len(panels) + 0.6), layout="constrained")
-        axes = fig.subplots(len(panels), 1, sharex=True)
+    panels += [(f"{a} (V)", [(a, h[a])], sat) for a in result.amplifiers if a not in out_amp]
+    with matplotlib.rc_context({"font.size": 8}):
+        height = 1.5 * len(panels) + 0.6
+        fig = plotting.figure(8.0, height)
+        axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
+        fig.subplots_adjust(left=0.8 / 8.0, right=1 - 0.15 / 8.0, top=1 - 0.4 / height, bottom=0.45 / height,
+                            hspace=0.25)
+        cols = plotting.columns(fig)
         for ax, (label, lines, rail) in zip(axes, panels):
             for name, y in lines:
-                ax.plot(t, y, lw=0.8, label=name)
+                ax.plot(*plotting.envelope(t, y, cols), lw=0.8, label=name)
             if rail is not None:
                 ax.axhline(rail, color="tab:red", lw=0.6, ls="--")
                 ax.axhline(-rail, color="tab:red", lw=0.6, ls="--")
@@ -458,7 +466,7 @@ def _plot(result: SimResult, out: Path) -> list[Path]:
             ax.set_ylabel(label)
             ax.grid(True, lw=0.3)
             if len(lines) > 1:
-                ax.legend(loc="upper right", fontsize=7)
+                ax.legend(loc="upper right", fontsize=7, ncols=len(lines))
         axes[-1].set_xlabel("t (s)")
         mode = "ideal" if result.ideal else f"bench {result.bench}"
         events = []
@@ -468,7 +476,4 @@ def _plot(result: SimResult, out: Path) -> list[Path]:
             events.append(f"fallen at {first.fall_time_s:.2f} s")
         fig.suptitle(f"{result.design} / {result.scenario.name} / {mode} / seed {result.seed}: "
                      + (", ".join(events) if events else "held"))
-        paths = [out / "history.png", out / "history.svg"]
-        fig.savefig(paths[0], dpi=100, metadata={"Software": None})
-        fig.savefig(paths[1], metadata={"Date": None, "Creator": None})
-    return paths
+        return plotting.save(fig, out / "history.png", out / "history.svg" if svg else None)

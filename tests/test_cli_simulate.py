@@ -22,7 +22,7 @@ def run(*args):
 
 def test_ch5_patch_fails_on_the_bench_and_says_why(tmp_path):
     r = run("simulate", "thesis-ch5", "--scenario", "hold-120s", "-o", str(tmp_path / "o"),
-            "--json")
+            "--json", "--svg")
     assert r.returncode == 0, r.stderr
     s = json.loads(r.stdout)
     assert s["first_run"]["held"] is False and s["first_run"]["limit_switch_tripped"] is True

@@ -38,10 +38,10 @@ def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal
                         progress=lambda done: prog.update(task, completed=done))
 
 
-def rendered_outputs(result: SimResult) -> dict[str, bytes]:
+def rendered_outputs(result: SimResult, svg: bool = False) -> dict[str, bytes]:
     """The simulator's files, rendered in a scratch directory and read back (for all-or-nothing writes)."""
     with tempfile.TemporaryDirectory() as tmp:
-        paths = write_outputs(result, tmp)
+        paths = write_outputs(result, tmp, svg=svg)
         return {p.name: p.read_bytes() for p in paths}
 
 
@@ -98,9 +98,10 @@ def _p(d, key: str) -> str:
               help="Monte Carlo over the plant too: each run draws M, m, l, b_VF, c uniformly within this "
               "fraction of the spec's values (e.g. 10%).")
 @click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters --spread draws.")
+@click.option("--svg", is_flag=True, help="Also write the plot as history.svg (PNG only by default).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
-def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, as_json, force) -> None:
+def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, svg, as_json, force) -> None:
     """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
     spread = None
     if spread_text is not None:
@@ -112,7 +113,7 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
     net = build_patch(d, machine)
     result = run_with_progress(net, plant_params(d.spec), bench, machine, scenario, seed=seed, runs=runs,
                                ideal=ideal, quiet=as_json, spread=spread)
-    files = rendered_outputs(result)
+    files = rendered_outputs(result, svg)
     files["netlist.json"] = net.to_json().encode()
     written = write_files(out_dir, files, force=force)
     if as_json:

@@ -399,8 +399,12 @@ def write_outputs(result: SimResult, out_dir: str | Path, svg: bool = False) -> 
         cols = np.column_stack([result.history[n] for n in names])
         buf = io.StringIO()
         buf.write(",".join(header) + "\n")
-        for row in cols:
-            buf.write(",".join(_num(v) for v in row) + "\n")
+        if np.isnan(cols).any():
+            for row in cols:
+                buf.write(",".join(_num(v) for v in row) + "\n")
+        else:  # one %-format per row: the same text as _num, four times faster
+            line = ",".join(["%.9g"] * len(names)) + "\n"
+            buf.writelines(line % tuple(row) for row in cols.tolist())
         path.write_text(buf.getvalue())
         written.append(path)
     path = out / "runs.csv"

@@ -3,12 +3,18 @@
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 
 import click
 
 from .. import __version__
 from ..errors import InputError
+
+# patchgen's matrices are a few states wide: OpenBLAS's worker threads only add start-up and
+# spin-waits (twice the time of a design on a busy machine) and take cores from the simulator's
+# threads. Set before numpy loads; a user's own setting wins. The results are the same.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 COMMANDS = ("design", "patch", "simulate", "spice", "recommend", "swingup", "sweep", "examples")
 

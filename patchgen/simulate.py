@@ -30,6 +30,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from . import plot_helper
 from .bench import BenchProfile
 from .circuit import Circuit, compile_circuit
 from .engine import (
@@ -392,6 +393,7 @@ def write_outputs(result: SimResult, out_dir: str | Path, svg: bool = False) -> 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = []
+    plot = plot_helper.submit(_plot, result, out, svg) if result.history is not None else None
     if result.history is not None:
         path = out / "history.csv"
         names = list(result.history)
@@ -424,8 +426,8 @@ def write_outputs(result: SimResult, out_dir: str | Path, svg: bool = False) -> 
     path = out / "summary.json"
     path.write_text(json.dumps(result.summary(), indent=2, sort_keys=True) + "\n")
     written.append(path)
-    if result.history is not None:
-        written += _plot(result, out, svg)
+    if plot is not None:
+        written += plot.result()
     return written
 
 

@@ -11,6 +11,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from .. import plot_helper
 from ..bench import load_bench
 from ..diagnosis import diagnose
 from ..model import plant_params
@@ -103,6 +104,7 @@ def _p(d, key: str) -> str:
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
 def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, svg, as_json, force) -> None:
     """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
+    plot_helper.start()  # matplotlib loads on the other core while this one simulates
     spread = None
     if spread_text is not None:
         frac = parse_by(spread_text, "--spread")

@@ -47,6 +47,17 @@ def figure(width_in: float, height_in: float):
     return Figure(figsize=(width_in, height_in))
 
 
+def stacked(width_in: float, height_in: float, n: int, top_in: float = 0.4, bottom_in: float = 0.45,
+            left_in: float = 0.8, right_in: float = 0.15, hspace: float = 0.25):
+    """A figure of ``n`` panels one above the other sharing the time axis, with fixed margins in
+    inches (a layout engine would draw the figure several times to find them). Returns (fig, axes)."""
+    fig = figure(width_in, height_in)
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    fig.subplots_adjust(left=left_in / width_in, right=1 - right_in / width_in, top=1 - top_in / height_in,
+                        bottom=bottom_in / height_in, hspace=hspace)
+    return fig, axes
+
+
 def save(fig, png: Path, svg: Path | None = None, dpi: float = PNG_DPI, salt: str = "patchgen") -> list[Path]:
     """Write the figure as PNG (no software tag) and, when ``svg`` is given, as a deterministic
     SVG (fixed hash salt, no date). Returns the paths written."""

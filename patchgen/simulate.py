@@ -453,11 +453,7 @@ def _plot(result: SimResult, out: Path, svg: bool = False) -> list[Path]:
               ("force (N)", [("force", h["force"])], None)]
     panels += [(f"{a} (V)", [(a, h[a])], sat) for a in result.amplifiers if a not in out_amp]
     with matplotlib.rc_context({"font.size": 8}):
-        height = 1.5 * len(panels) + 0.6
-        fig = plotting.figure(8.0, height)
-        axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
-        fig.subplots_adjust(left=0.8 / 8.0, right=1 - 0.15 / 8.0, top=1 - 0.4 / height, bottom=0.45 / height,
-                            hspace=0.25)
+        fig, axes = plotting.stacked(8.0, 1.5 * len(panels) + 0.6, len(panels))
         cols = plotting.columns(fig)
         for ax, (label, lines, rail) in zip(axes, panels):
             for name, y in lines:

@@ -44,7 +44,7 @@ class Job:
             (self._proc, self._conn), _helper = _helper, None
             try:
                 self._conn.send((fn, args))
-            except (OSError, EOFError):
+            except Exception:  # arguments that do not pickle, or the helper gone: draw here
                 self._close()
 
     def result(self):

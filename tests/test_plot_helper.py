@@ -33,3 +33,8 @@ def test_an_error_in_the_helper_is_raised_here():
     plot_helper.start()
     with pytest.raises(ValueError, match="bad 3"):
         plot_helper.submit(fails, 3).result()
+
+
+def test_arguments_that_do_not_pickle_are_drawn_here():
+    plot_helper.start()
+    assert plot_helper.submit(lambda f: (os.getpid(), f(2)), lambda x: x + 1).result() == (os.getpid(), 3)

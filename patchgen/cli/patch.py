@@ -13,7 +13,6 @@ from ..model import plant_params
 from ..outputs import write_files
 from ..patch import build_patch
 from ..pottable import pot_rows, pot_table, pots_csv
-from ..prediction import diagnosis_note, predict, prediction_rows
 from ..sheet import SheetSection, SheetSummary, render_sheet
 from . import cli
 from .design import design_from_path
@@ -43,6 +42,8 @@ def _margin_cells(m) -> dict[str, str]:
 
 def bench_section(d, machine, net, runs_hold: int, done=None) -> SheetSection:
     """'Predicted on the bench' from the standard scenarios (``done``: see prediction.predict)."""
+    from ..prediction import diagnosis_note, predict, prediction_rows  # the simulator: numba, only here
+
     bench = load_bench(d.spec.bench, d.spec.path)
     plant = plant_params(d.spec)
     header, rows = prediction_rows(predict(net, plant, bench, machine, runs_hold=runs_hold, done=done))

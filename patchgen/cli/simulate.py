@@ -8,7 +8,6 @@ from pathlib import Path
 
 import click
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from .. import plot_helper
@@ -19,7 +18,6 @@ from ..outputs import write_files
 from ..patch import build_patch
 from ..scenario import load_scenario
 from ..simulate import SimResult, simulate, write_outputs
-from ..sweep import parse_by, parse_vary
 from . import cli
 from .design import design_from_path
 
@@ -30,6 +28,8 @@ def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal
     if runs <= 1 or quiet:
         return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
                         keep_history=keep_history, spread=spread)
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
     cols = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
             TimeElapsedColumn())
     with Progress(*cols, console=Console(stderr=True), transient=True) as prog:
@@ -107,6 +107,8 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
     plot_helper.start()  # matplotlib loads on the other core while this one simulates
     spread = None
     if spread_text is not None:
+        from ..sweep import parse_by, parse_vary
+
         frac = parse_by(spread_text, "--spread")
         spread = {name: frac for name in parse_vary(vary)}
     d, machine = design_from_path(spec)

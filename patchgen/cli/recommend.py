@@ -92,8 +92,8 @@ def recommend_cmd(spec, out_dir, runs, scenario_path, seed, as_json, force):
                          + "; ".join(f"{c.label}: {c.error}" for c in rec.ranked))
     md = table_markdown(rec, machine.reference_V)
     # the sheet's 120 s hold is the first seeds of this Monte Carlo when it ran that scenario
-    done = {"hold-120s": list(best.results)} if scenario == load_scenario("hold-120s") and \
-        rec.seed == scenario.seed else None
+    same_hold = scenario == load_scenario("hold-120s") and rec.seed == scenario.seed
+    done = {"hold-120s": list(best.results)} if same_hold else None
     files = patch_files(best.design, machine, best.netlist, extra_sections=[why_section(rec, machine)], done=done)
     files["recommendation.md"] = f"# Why this patch\n\n{md}"
     rows = table_rows(rec)

@@ -3,7 +3,7 @@
 A 120 s history has 12,001 samples per trace; a plot 8 inches wide at 100 dpi has 800 pixel
 columns. :func:`envelope` keeps, of each column's samples, the smallest and the largest (in time
 order), so the line drawn through them covers every pixel the full trace would, spikes included,
-at a tenth of the points. :func:`save` writes the PNG, and the SVG copy only when asked for.
+at an eighth of the points. :func:`save` writes the PNG, and the SVG copy only when asked for.
 matplotlib is imported here, by the commands that plot, never at start-up.
 """
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 import threading
 from collections.abc import Callable
 
@@ -53,16 +54,20 @@ class Job:
                 ok, value = self._conn.recv()
             except (OSError, EOFError):  # the helper died: draw here
                 ok, value = None, None
-            finally:
-                self._close()
+            except BaseException:  # Ctrl-C: stop the helper too
+                self._close(stop=True)
+                raise
+            self._close()
             if ok:
                 return value
             if ok is False:
                 raise value
         return self._fn(*self._args)
 
-    def _close(self) -> None:
+    def _close(self, stop: bool = False) -> None:
         self._conn.close()  # the helper's next recv ends, and so does the helper
+        if stop:
+            self._proc.terminate()
         self._proc.join(timeout=5)
         self._conn = None
 
@@ -74,6 +79,7 @@ def submit(fn: Callable, *args) -> Job:
 
 def _serve(conn) -> None:
     """The helper: load matplotlib, draw a scrap figure, then run the one job sent."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the command's to handle
     try:
         _warm_up()
     except Exception:  # the job will report what is wrong

@@ -128,20 +128,22 @@ def force_error_rms(model: LinearModel, K: np.ndarray, ctl: Controller, noise: N
 def choose(model: LinearModel, K: np.ndarray, build: Callable[[float], Controller], noise: NoiseModel,
            grid: np.ndarray, accept: Callable[[Controller], bool] = lambda c: True) -> CornerChoice:
     """The grid value whose controller gives the smallest predicted force error (among those
-    ``accept`` passes)."""
-    best = None
-    for v in grid:
+    ``accept`` passes; ties to the first on the grid). ``accept``, a margin check and the costly
+    part, runs on the candidates from the smallest error up, until one passes."""
+    scored = []
+    for k, v in enumerate(grid):
         try:
             ctl = build(float(v))
         except ValueError:
             continue
         r = force_error_rms(model, K, ctl, noise)
-        if math.isfinite(r) and (best is None or r < best[1]) and accept(ctl):
-            best = (float(v), r)
-    if best is None:
-        raise ValueError(f"no estimator speed on the grid gives a stable loop with {MIN_PM_DEG:g} deg of "
-                         "phase margin")
-    return CornerChoice(_round3(best[0]), best[1], len(grid))
+        if math.isfinite(r):
+            scored.append((r, k, float(v), ctl))
+    for r, _, v, ctl in sorted(scored, key=lambda c: c[:2]):
+        if accept(ctl):
+            return CornerChoice(_round3(v), r, len(grid))
+    raise ValueError(f"no estimator speed on the grid gives a stable loop with {MIN_PM_DEG:g} deg of "
+                     "phase margin")
 
 
 def _round3(x: float) -> float:

@@ -287,7 +287,7 @@ def _noise_shaped_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray)
     if fixed is None:
         try:
             def robust(c):
-                mg = loop_margins(*loop_with_controller(model, c))
+                mg = loop_margins(*loop_with_controller(model, c), gain_limits=False)
                 return mg.stable and mg.pm_deg is not None and mg.pm_deg >= corner.MIN_PM_DEG
 
             choice = corner.choose(model, K, build, noise, grid, robust)

@@ -17,12 +17,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import schemdraw
-from schemdraw.backends import svg as svg_backend
-from schemdraw.elements import Element, Line
-from schemdraw.segments import Segment, SegmentCircle, SegmentPoly, SegmentText
-
 from .netlist import Amplifier, Netlist
+from .schematic import Element, Line, Segment, SegmentCircle, SegmentPoly, SegmentText, schemdraw, svg_backend
 
 # Geometry in drawing units (schemdraw draws 0.5 inch per unit, so 1 unit = 36 pt).
 PIN_PITCH = 0.72        # vertical distance between two inputs of one amplifier

@@ -81,28 +81,27 @@ def manoeuvre(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Ma
     return Manoeuvre(pump, simulate(net, plant, bench, machine, sc, ideal=ideal), hold_s, zone, sensitivity)
 
 
-def plot_manoeuvre(m: Manoeuvre, stem: Path, title: str) -> list[Path]:
-    """s, theta and force over the whole manoeuvre, the hand-off marked (PNG and deterministic SVG)."""
-    import matplotlib
+def plot_manoeuvre(m: Manoeuvre, stem: Path, title: str, svg: bool = False) -> list[Path]:
+    """s, theta and force over the whole manoeuvre, the hand-off marked (PNG, and a deterministic
+    SVG with ``svg``)."""
+    from . import plotting
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    matplotlib.rcParams["svg.hashsalt"] = "patchgen"
     p = m.pump
     t0 = p.handoff_time if p.reached else p.t[-1]
     keep = p.t <= t0
-    fig, ax = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
-    ax[0].plot(p.t[keep], p.x[keep, 0], color="C0", label="pump-up")
-    ax[1].plot(p.t[keep], np.degrees(p.x[keep, 1]), color="C0")
-    ax[2].plot(p.t[keep], p.u[keep], color="C0")
+    fig, ax = plotting.stacked(8, 7, 3)
+    cols = plotting.columns(fig)
+    env = lambda t, y: plotting.envelope(t, y, cols)
+    ax[0].plot(*env(p.t[keep], p.x[keep, 0]), color="C0", label="pump-up")
+    ax[1].plot(*env(p.t[keep], np.degrees(p.x[keep, 1])), color="C0")
+    ax[2].plot(*env(p.t[keep], p.u[keep]), color="C0")
     if m.hold is not None:
         h = m.hold.history
         t = h["t"] + t0
         turns = 2 * np.pi * np.round((p.handoff_state[1] - wrap_angle(p.handoff_state[1])) / (2 * np.pi))
-        ax[0].plot(t, h["s"], color="C1", label="patched controller (bench)")
-        ax[1].plot(t, np.degrees(h["theta"] + turns), color="C1")
-        ax[2].plot(t, h["force"], color="C1")
+        ax[0].plot(*env(t, h["s"]), color="C1", label="patched controller (bench)")
+        ax[1].plot(*env(t, np.degrees(h["theta"] + turns)), color="C1")
+        ax[2].plot(*env(t, h["force"]), color="C1")
     half = p.plant.d / 2
     for a in ax:
         a.axvline(t0, color="k", lw=0.6, ls=":")
@@ -115,9 +114,4 @@ def plot_manoeuvre(m: Manoeuvre, stem: Path, title: str) -> list[Path]:
     ax[2].set_xlabel("t (s)")
     ax[0].legend(loc="upper right", fontsize=8)
     ax[0].set_title(title, fontsize=10)
-    fig.tight_layout()
-    out = [stem.with_suffix(".png"), stem.with_suffix(".svg")]
-    fig.savefig(out[0], dpi=100, metadata={"Software": None})
-    fig.savefig(out[1], metadata={"Date": None, "Creator": None})
-    plt.close(fig)
-    return out
+    return plotting.save(fig, stem.with_suffix(".png"), stem.with_suffix(".svg") if svg else None)

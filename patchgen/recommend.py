@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .bench import BenchProfile
 from .design import Design, design
@@ -28,7 +28,7 @@ from .model import plant_params
 from .netlist import Netlist
 from .patch import build_patch
 from .scenario import Scenario
-from .simulate import simulate
+from .simulate import RunSummary, simulate
 from .spec import DesignSpec
 
 CANDIDATES = (
@@ -53,6 +53,7 @@ class Candidate:
     fraction_overloaded: float | None = None
     worst_swing_V: float | None = None  # largest |amplifier output| over the runs' peaks
     estimator_detail: str = ""
+    results: tuple[RunSummary, ...] = field(default=(), repr=False, compare=False)  # the Monte Carlo's runs
 
     @property
     def gm_db(self) -> float | None:
@@ -160,7 +161,7 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
     if any(r.overloads for r in res.runs):
         swing = max(swing, machine.imperfections.saturation_V)
     return Candidate(c.label, c.kind, c.design, c.netlist, None, runs, ok, D.fraction_fallen,
-                     D.fraction_tripped, D.fraction_overloaded, swing, c.estimator_detail)
+                     D.fraction_tripped, D.fraction_overloaded, swing, c.estimator_detail, tuple(res.runs))
 
 
 def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenario: Scenario,

@@ -29,6 +29,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from . import plot_helper
 from .bench import BenchProfile
 from .circuit import Circuit, compile_circuit
 from .engine import (
@@ -373,12 +374,14 @@ _UNITS = {"t": "s", "s": "m", "theta": "rad", "s_dot": "m_per_s", "theta_dot": "
           "s_ref": "m", "u_c": "V", "force": "N"}
 
 
-def write_outputs(result: SimResult, out_dir: str | Path) -> list[Path]:
+def write_outputs(result: SimResult, out_dir: str | Path, svg: bool = False) -> list[Path]:
     """Write history.csv (first run), runs.csv (one line per run), summary.json (sorted keys)
-    and history.png / history.svg plots; same result -> same bytes. Returns the paths."""
+    and the history.png plot (and history.svg with ``svg``); same result -> same bytes.
+    Returns the paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = []
+    plot = plot_helper.submit(_plot, result, out, svg) if result.history is not None else None
     if result.history is not None:
         path = out / "history.csv"
         names = list(result.history)
@@ -386,8 +389,12 @@ def write_outputs(result: SimResult, out_dir: str | Path) -> list[Path]:
         cols = np.column_stack([result.history[n] for n in names])
         buf = io.StringIO()
         buf.write(",".join(header) + "\n")
-        for row in cols:
-            buf.write(",".join(_num(v) for v in row) + "\n")
+        if np.isnan(cols).any():
+            for row in cols:
+                buf.write(",".join(_num(v) for v in row) + "\n")
+        else:  # one %-format per row: the same text as _num, four times faster
+            line = ",".join(["%.9g"] * len(names)) + "\n"
+            buf.writelines(line % tuple(row) for row in cols.tolist())
         path.write_text(buf.getvalue())
         written.append(path)
     path = out / "runs.csv"
@@ -407,8 +414,8 @@ def write_outputs(result: SimResult, out_dir: str | Path) -> list[Path]:
     path = out / "summary.json"
     path.write_text(json.dumps(result.summary(), indent=2, sort_keys=True) + "\n")
     written.append(path)
-    if result.history is not None:
-        written += _plot(result, out)
+    if plot is not None:
+        written += plot.result()
     return written
 
 
@@ -416,26 +423,29 @@ def _num(v: float | None) -> str:
     return "" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.9g}"
 
 
-def _plot(result: SimResult, out: Path) -> list[Path]:
+def _plot(result: SimResult, out: Path, svg: bool = False) -> list[Path]:
+    """The first run's histories, a panel each; u_c shares the panel of the amplifier that
+    makes it (the same trace), with the rails."""
     import matplotlib
-    from matplotlib.figure import Figure
+
+    from . import plotting
 
     h = result.history
     t = h["t"]
     first = result.runs[0]
     sat = result.settings.saturation_V
+    out_amp = [a for a in result.amplifiers if np.array_equal(h[a], h["u_c"])][:1]
     panels = [("s (m)", [("s", h["s"]), ("s_ref", h["s_ref"])], None),
               ("theta (deg)", [("theta", np.degrees(h["theta"]))], None),
-              ("u_c (V)", [("u_c", h["u_c"])], None),
+              (f"u_c = {out_amp[0]} (V)" if out_amp else "u_c (V)", [("u_c", h["u_c"])], sat if out_amp else None),
               ("force (N)", [("force", h["force"])], None)]
-    panels += [(f"{a} (V)", [(a, h[a])], sat) for a in result.amplifiers]
-    with matplotlib.rc_context({"svg.hashsalt": "patchgen", "svg.fonttype": "path",
-                                "font.size": 8}):
-        fig = Figure(figsize=(8.0, 1.5 * len(panels) + 0.6), layout="constrained")
-        axes = fig.subplots(len(panels), 1, sharex=True)
+    panels += [(f"{a} (V)", [(a, h[a])], sat) for a in result.amplifiers if a not in out_amp]
+    with matplotlib.rc_context({"font.size": 8}):
+        fig, axes = plotting.stacked(8.0, 1.5 * len(panels) + 0.6, len(panels))
+        cols = plotting.columns(fig)
         for ax, (label, lines, rail) in zip(axes, panels):
             for name, y in lines:
-                ax.plot(t, y, lw=0.8, label=name)
+                ax.plot(*plotting.envelope(t, y, cols), lw=0.8, label=name)
             if rail is not None:
                 ax.axhline(rail, color="tab:red", lw=0.6, ls="--")
                 ax.axhline(-rail, color="tab:red", lw=0.6, ls="--")
@@ -446,7 +456,7 @@ def _plot(result: SimResult, out: Path) -> list[Path]:
             ax.set_ylabel(label)
             ax.grid(True, lw=0.3)
             if len(lines) > 1:
-                ax.legend(loc="upper right", fontsize=7)
+                ax.legend(loc="upper right", fontsize=7, ncols=len(lines))
         axes[-1].set_xlabel("t (s)")
         mode = "ideal" if result.ideal else f"bench {result.bench}"
         events = []
@@ -456,7 +466,4 @@ def _plot(result: SimResult, out: Path) -> list[Path]:
             events.append(f"fallen at {first.fall_time_s:.2f} s")
         fig.suptitle(f"{result.design} / {result.scenario.name} / {mode} / seed {result.seed}: "
                      + (", ".join(events) if events else "held"))
-        paths = [out / "history.png", out / "history.svg"]
-        fig.savefig(paths[0], dpi=100, metadata={"Software": None})
-        fig.savefig(paths[1], metadata={"Date": None, "Creator": None})
-    return paths
+        return plotting.save(fig, out / "history.png", out / "history.svg" if svg else None)

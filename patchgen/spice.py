@@ -613,38 +613,30 @@ _UNITS = {"theta": ("deg", 180.0 / math.pi), "s": ("m", 1.0), "s_dot": ("m/s", 1
 
 
 def plot_comparison(cmp: Comparison, stem: str | Path, title: str = "",
-                    own_label: str = "patchgen") -> list[Path]:
-    """Overlay plot of each compared signal (ngspice dashed over patchgen's), as PNG and SVG.
-
-    The SVG is byte-for-byte deterministic (fixed hash salt, no date).
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+                    own_label: str = "patchgen", svg: bool = False) -> list[Path]:
+    """Overlay plot of each compared signal (ngspice dashed over patchgen's), as PNG (and SVG with
+    ``svg``). The SVG is byte-for-byte deterministic (fixed hash salt, no date)."""
+    from . import plotting
 
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
-    with plt.rc_context({"svg.hashsalt": "patchgen", "svg.fonttype": "path"}):
-        names = list(cmp.signals)
-        fig, axes = plt.subplots(len(names), 1, figsize=(7.0, 2.4 * len(names)), sharex=True,
-                                 squeeze=False)
-        for ax, name in zip(axes[:, 0], names):
-            unit, scale = _UNITS.get(name, ("", 1.0))
-            a = cmp.signals[name]
-            ax.plot(cmp.t, cmp.own[name] * scale, color="tab:blue", lw=1.6, label=own_label)
-            ax.plot(cmp.t, cmp.spice[name] * scale, color="tab:orange", lw=1.2, ls="--", label="ngspice")
-            ax.set_ylabel(f"{name} ({unit})" if unit else name)
-            ax.set_title(f"{name}: RMS diff {100 * a.rms_rel:.3f} %, max diff {100 * a.max_rel:.3f} % "
-                         f"of peak", fontsize=9)
-            ax.grid(True, alpha=0.3)
-            ax.legend(loc="upper right", fontsize=8)
-        axes[-1, 0].set_xlabel("time (s)")
-        if title:
-            fig.suptitle(title, fontsize=10)
-        fig.tight_layout()
-        png, svg = stem.with_suffix(".png"), stem.with_suffix(".svg")
-        fig.savefig(png, dpi=120, metadata={"Software": None})
-        fig.savefig(svg, metadata={"Date": None, "Creator": None})
-        plt.close(fig)
-    return [png, svg]
+    names = list(cmp.signals)
+    height = 2.4 * len(names)
+    fig, axes = plotting.stacked(7.0, height, len(names), top_in=0.6 if title else 0.35, left_in=0.85,
+                                 hspace=0.35 * 2.4 / 1.9)
+    cols = plotting.columns(fig, dpi=120)
+    for ax, name in zip(axes, names):
+        unit, scale = _UNITS.get(name, ("", 1.0))
+        a = cmp.signals[name]
+        ax.plot(*plotting.envelope(cmp.t, cmp.own[name] * scale, cols), color="tab:blue", lw=1.6, label=own_label)
+        ax.plot(*plotting.envelope(cmp.t, cmp.spice[name] * scale, cols), color="tab:orange", lw=1.2, ls="--",
+                label="ngspice")
+        ax.set_ylabel(f"{name} ({unit})" if unit else name)
+        ax.set_title(f"{name}: RMS diff {100 * a.rms_rel:.3f} %, max diff {100 * a.max_rel:.3f} % "
+                     f"of peak", fontsize=9)
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("time (s)")
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return plotting.save(fig, stem.with_suffix(".png"), stem.with_suffix(".svg") if svg else None, dpi=120)

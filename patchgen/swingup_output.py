@@ -1,4 +1,4 @@
-"""Files from a pump-up run: histories CSV, switching table (CSV, Markdown), plot (PNG, SVG).
+"""Files from a pump-up run: histories CSV, switching table (CSV, Markdown), plot (PNG; SVG on request).
 
 Outputs are deterministic: fixed number formats, and the SVG has a fixed hash salt and no date.
 """
@@ -62,8 +62,9 @@ def switching_table_markdown(result: SwingUpResult) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_outputs(result: SwingUpResult, out_dir: str | Path, stem: str = "swingup") -> list[Path]:
-    """Write <stem>-history.csv, <stem>-switching.csv/.md and <stem>.png/.svg; return the paths."""
+def write_outputs(result: SwingUpResult, out_dir: str | Path, stem: str = "swingup", svg: bool = False) -> list[Path]:
+    """Write <stem>-history.csv, <stem>-switching.csv/.md and <stem>.png (and <stem>.svg with
+    ``svg``); return the paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
@@ -87,33 +88,31 @@ def write_outputs(result: SwingUpResult, out_dir: str | Path, stem: str = "swing
     md = out / f"{stem}-switching.md"
     md.write_text(switching_table_markdown(result))
     paths.append(md)
-    paths += plot(result, out / f"{stem}.png", out / f"{stem}.svg")
+    paths += plot(result, out / f"{stem}.png", out / f"{stem}.svg" if svg else None)
     return paths
 
 
-def plot(result: SwingUpResult, png: Path, svg: Path) -> list[Path]:
-    """States, force and energy against time, with the hand-off marked."""
-    import matplotlib
+def plot(result: SwingUpResult, png: Path, svg: Path | None = None) -> list[Path]:
+    """States, force and energy against time, with the hand-off marked (PNG; SVG when given)."""
+    from . import plotting
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    plt.rcParams["svg.hashsalt"] = "patchgen-swingup"
     t, x = result.t, result.x
-    fig, ax = plt.subplots(5, 1, figsize=(8, 10), sharex=True)
+    fig, ax = plotting.stacked(8, 10, 5)
+    cols = plotting.columns(fig)
+    env = lambda y: plotting.envelope(t, y, cols)
     half = result.plant.d / 2.0
-    ax[0].plot(t, x[:, 0], color="C0")
+    ax[0].plot(*env(x[:, 0]), color="C0")
     for y in (-half, half):
         ax[0].axhline(y, color="k", lw=0.8, ls="--")
     ax[0].set_ylabel("s (m)")
-    ax[1].plot(t, np.degrees(wrap_angle(x[:, 1])), color="C1")
+    ax[1].plot(*env(np.degrees(wrap_angle(x[:, 1]))), color="C1")
     ax[1].set_ylabel("theta (deg, 0 up)")
-    ax[2].plot(t, x[:, 2], color="C2", label="s_dot (m/s)")
-    ax[2].plot(t, x[:, 3], color="C3", label="theta_dot (rad/s)")
+    ax[2].plot(*env(x[:, 2]), color="C2", label="s_dot (m/s)")
+    ax[2].plot(*env(x[:, 3]), color="C3", label="theta_dot (rad/s)")
     ax[2].legend(loc="upper right")
-    ax[3].step(t, result.u, where="post", color="C4")
+    ax[3].step(*env(result.u), where="post", color="C4")
     ax[3].set_ylabel("force (N)")
-    ax[4].plot(t, pendulum_energy(result.plant, x.T) / upright_energy(result.plant), color="C5")
+    ax[4].plot(*env(pendulum_energy(result.plant, x.T) / upright_energy(result.plant)), color="C5")
     ax[4].axhline(1.0, color="k", lw=0.8, ls=":")
     ax[4].set_ylabel("E / E0")
     ax[4].set_xlabel("t (s)")
@@ -124,8 +123,4 @@ def plot(result: SwingUpResult, png: Path, svg: Path) -> list[Path]:
     if result.handoff_time is not None:
         title += f": hand-off at {result.handoff_time:.3f} s"
     ax[0].set_title(title)
-    fig.tight_layout()
-    fig.savefig(png, dpi=100)
-    fig.savefig(svg, metadata={"Date": None})
-    plt.close(fig)
-    return [Path(png), Path(svg)]
+    return plotting.save(fig, png, svg, salt="patchgen-swingup")

@@ -22,7 +22,7 @@ def run(*args):
 
 def test_ch5_patch_fails_on_the_bench_and_says_why(tmp_path):
     r = run("simulate", "thesis-ch5", "--scenario", "hold-120s", "-o", str(tmp_path / "o"),
-            "--json")
+            "--json", "--svg")
     assert r.returncode == 0, r.stderr
     s = json.loads(r.stdout)
     assert s["first_run"]["held"] is False and s["first_run"]["limit_switch_tripped"] is True
@@ -57,7 +57,7 @@ def test_bad_scenario_field_one_line(tmp_path):
 @pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "patchgen" / "designs").glob("*.toml")))
 def test_spice_ideal_agrees_within_one_percent(tmp_path, name):
     r = run("spice", name, "--scenario", "offset-10deg", "--ideal", "-o",
-            str(tmp_path), "--json")
+            str(tmp_path), "--json", "--svg")
     if r.returncode == 2:  # a design that does not fit the machine: the one-line resource error
         assert "needs" in r.stderr and len(r.stderr.strip().splitlines()) == 1
         return

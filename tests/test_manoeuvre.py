@@ -34,13 +34,13 @@ def test_bench_recommended_from_hanging_to_held():
 
 def test_swingup_cli_writes_schedule_on_the_sheet(tmp_path):
     r = subprocess.run([sys.executable, "-m", "patchgen", "swingup", "bench-recommended", "-o",
-                        str(tmp_path), "--json"], capture_output=True, text=True, cwd=ROOT)
+                        str(tmp_path), "--json", "--svg"], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 0, r.stderr
     s = json.loads(r.stdout)
     assert s["reached_zone"] and s["handoff_time_s"] < 7 and s["held"]
     sheet = (tmp_path / "patch-sheet.md").read_text()
     assert "Pump-up schedule" in sheet and "hand-off" in sheet
-    for f in ("manoeuvre.png", "manoeuvre.svg", "swingup-switching.csv", "netlist.json"):
+    for f in ("manoeuvre.png", "manoeuvre.svg", "swingup.svg", "swingup-switching.csv", "netlist.json"):
         assert (tmp_path / f).exists()
 
 

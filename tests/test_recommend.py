@@ -132,3 +132,16 @@ def test_reduced_observer_patch_reads_back_on_a_roomier_machine():
     net = build_patch(d, big)
     assert {a.role for a in net.amplifiers} >= {"lag", "summer"}
     check_roundtrip(d, net, big.pot_resolution)
+
+
+def test_sheet_prediction_from_the_monte_carlo_equals_a_fresh_one():
+    # recommend hands its hold-120s runs to the sheet's prediction instead of simulating them again
+    from patchgen.prediction import predict
+
+    d, machine = design_from_path(design_path("bench-recommended"))
+    net = build_patch(d, machine)
+    bench, plant = load_bench(d.spec.bench, d.spec.path), plant_params(d.spec)
+    mc = simulate(net, plant, bench, machine, load_scenario("hold-120s"), runs=12)
+    fresh = predict(net, plant, bench, machine, runs_hold=8, scenarios=("hold-120s",))
+    assert predict(net, plant, bench, machine, runs_hold=8, scenarios=("hold-120s",),
+                   done={"hold-120s": mc.runs}) == fresh

@@ -139,10 +139,11 @@ def test_monte_carlo_distribution_and_progress(ch5):
 def test_outputs_are_deterministic(ch5, tmp_path):
     sc = load_scenario(SIMS / "finger-push.toml").model_copy(update={"duration_s": 3.0})
     res = simulate(ch5, PLANT, BENCH, GP6, sc)
-    first = write_outputs(res, tmp_path / "a")
-    second = write_outputs(simulate(ch5, PLANT, BENCH, GP6, sc), tmp_path / "b")
+    first = write_outputs(res, tmp_path / "a", svg=True)
+    second = write_outputs(simulate(ch5, PLANT, BENCH, GP6, sc), tmp_path / "b", svg=True)
     names = sorted(p.name for p in first)
     assert names == ["history.csv", "history.png", "history.svg", "runs.csv", "summary.json"]
+    assert "history.svg" not in {p.name for p in write_outputs(res, tmp_path / "c")}  # SVG on request
     for p, q in zip(first, second):
         assert p.read_bytes() == q.read_bytes(), p.name
     header = (tmp_path / "a/history.csv").read_text().splitlines()[0].split(",")

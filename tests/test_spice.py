@@ -258,10 +258,11 @@ def test_ngspice_agrees_with_ideal_reference(net, gp6, bench, reference, tmp_pat
     assert cmp.agrees(0.01)
     # u_c leaves A7 (the netlist's output) and starts at the loop's static value.
     assert result.signals["u_c"][0] == pytest.approx(reference.signals["u_c"][0], rel=1e-3)
-    files = plot_comparison(cmp, tmp_path / "overlay", title="thesis-ch5, 10 deg")
+    files = plot_comparison(cmp, tmp_path / "overlay", title="thesis-ch5, 10 deg", svg=True)
     assert [f.suffix for f in files] == [".png", ".svg"] and all(f.stat().st_size > 0 for f in files)
-    again = plot_comparison(cmp, tmp_path / "again")
-    first = plot_comparison(cmp, tmp_path / "first")
+    assert [f.suffix for f in plot_comparison(cmp, tmp_path / "png")] == [".png"]  # SVG on request
+    again = plot_comparison(cmp, tmp_path / "again", svg=True)
+    first = plot_comparison(cmp, tmp_path / "first", svg=True)
     assert hashlib.sha256(first[1].read_bytes()).digest() == hashlib.sha256(again[1].read_bytes()).digest()
 
 

@@ -111,8 +111,9 @@ def test_optimised_schedule_no_slower_than_supervisory(zone):
 
 
 def test_outputs_are_deterministic(supervisory, tmp_path):
-    a = write_outputs(supervisory, tmp_path / "a")
-    b = write_outputs(supervisory, tmp_path / "b")
+    a = write_outputs(supervisory, tmp_path / "a", svg=True)
+    b = write_outputs(supervisory, tmp_path / "b", svg=True)
+    assert [p.suffix for p in a[-2:]] == [".png", ".svg"]
     for pa, pb in zip(a, b):
         assert pa.read_bytes() == pb.read_bytes(), pa.name
     sheet = patch_sheet_rows(supervisory)

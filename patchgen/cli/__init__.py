@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 
 import click
@@ -10,7 +11,31 @@ import click
 from .. import __version__
 from ..errors import InputError
 
+# patchgen's matrices are a few states wide: OpenBLAS's worker threads only add start-up and
+# spin-waits (twice the time of a design on a busy machine) and take cores from the simulator's
+# threads. Set before numpy loads; a user's own setting wins. The results are the same.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 COMMANDS = ("design", "patch", "simulate", "spice", "recommend", "swingup", "sweep", "examples")
+
+# The first sentence of each command's docstring, for `patchgen --help` without importing every
+# command (and so numpy, scipy, numba, matplotlib). tests/test_cli_imports.py keeps them in step.
+SUMMARIES = {
+    "design": "Compute the LQR gain, Kalman estimator, loop transfer recovery and loop margins of SPEC.",
+    "patch": "Scale SPEC's gains, allocate the machine and write the patch: netlist.json, pots.csv, "
+             "patch-sheet.html, patch-sheet.md (with the bench prediction) and wiring.svg.",
+    "simulate": "Simulate SPEC's patched circuit (built from its netlist) on the bench.",
+    "spice": "Export SPEC's patch and the bench as an ngspice deck, run it, and compare with patchgen's own "
+             "simulation of the same scenario.",
+    "recommend": "Design, allocate and simulate each realisation of SPEC's estimator; write the best patch.",
+    "swingup": "Pump SPEC's pendulum up from hanging at rest, hand it to the patched controller when the state "
+               "enters the zone of the linear design, and hold it on the bench (actuator lag and dead zone, "
+               "noise, drift).",
+    "sweep": "Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2): the gains, the "
+             "margins, the pots that would change, and how the nominal patch (as wired) does on that plant.",
+    "examples": "Copy the shipped designs (DIR/designs), scenarios (DIR/sims) and machine and bench profiles "
+                "(DIR/machines, DIR/benches) into DIR, to edit and run by path.",
+}
 
 
 class _Group(click.Group):
@@ -24,6 +49,15 @@ class _Group(click.Group):
         if name in COMMANDS and name not in self.commands:
             importlib.import_module(f"{__name__}.{name}")  # its @cli.command registers it
         return super().get_command(ctx, name)
+
+    def format_commands(self, ctx, formatter):
+        """The command list from SUMMARIES, as click would write it from the loaded commands."""
+        names = self.list_commands(ctx)
+        limit = formatter.width - 6 - max(len(n) for n in names)
+        cmds = [self.commands.get(n) or click.Command(n, help=SUMMARIES[n]) for n in names]
+        rows = [(n, c.get_short_help_str(limit)) for n, c in zip(names, cmds)]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
 
     def invoke(self, ctx):
         try:

@@ -13,7 +13,6 @@ from ..model import plant_params
 from ..outputs import write_files
 from ..patch import build_patch
 from ..pottable import pot_rows, pot_table, pots_csv
-from ..prediction import diagnosis_note, predict, prediction_rows
 from ..sheet import SheetSection, SheetSummary, render_sheet
 from . import cli
 from .design import design_from_path
@@ -41,11 +40,13 @@ def _margin_cells(m) -> dict[str, str]:
             "delay margin": "-" if m.delay_margin_s is None else f"{m.delay_margin_s * 1000:.1f} ms"}
 
 
-def bench_section(d, machine, net, runs_hold: int) -> SheetSection:
-    """'Predicted on the bench' from the standard scenarios."""
+def bench_section(d, machine, net, runs_hold: int, done=None) -> SheetSection:
+    """'Predicted on the bench' from the standard scenarios (``done``: see prediction.predict)."""
+    from ..prediction import diagnosis_note, predict, prediction_rows  # the simulator: numba, only here
+
     bench = load_bench(d.spec.bench, d.spec.path)
     plant = plant_params(d.spec)
-    header, rows = prediction_rows(predict(net, plant, bench, machine, runs_hold=runs_hold))
+    header, rows = prediction_rows(predict(net, plant, bench, machine, runs_hold=runs_hold, done=done))
     note = (f"From this netlist on the {bench.id} bench: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
             f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; drift "
             f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s (profile default, no GP-6 figure published); "
@@ -54,12 +55,13 @@ def bench_section(d, machine, net, runs_hold: int) -> SheetSection:
     return SheetSection("Predicted on the bench", header, rows, note)
 
 
-def patch_files(d, machine, net, extra_sections=(), runs_hold: int = 20, predict_bench: bool = True) -> dict[str, str]:
+def patch_files(d, machine, net, extra_sections=(), runs_hold: int = 20, predict_bench: bool = True,
+                done=None) -> dict[str, str]:
     """Every file of a patch, rendered in memory (nothing is written until all are ready)."""
     files = {"netlist.json": net.to_json(), "pots.csv": pots_csv(net)}
     sections = list(extra_sections)
     if predict_bench:
-        sections.insert(0, bench_section(d, machine, net, runs_hold))
+        sections.insert(0, bench_section(d, machine, net, runs_hold, done))
     svg = wiring_svg(net)
     html, md = render_sheet(net, sheet_summary(d, sections), svg)
     files.update({"wiring.svg": svg, "patch-sheet.html": html, "patch-sheet.md": md})

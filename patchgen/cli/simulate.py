@@ -8,9 +8,9 @@ from pathlib import Path
 
 import click
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from .. import plot_helper
 from ..bench import load_bench
 from ..diagnosis import diagnose
 from ..model import plant_params
@@ -18,7 +18,6 @@ from ..outputs import write_files
 from ..patch import build_patch
 from ..scenario import load_scenario
 from ..simulate import SimResult, simulate, write_outputs
-from ..sweep import parse_by, parse_vary
 from . import cli
 from .design import design_from_path
 
@@ -29,6 +28,8 @@ def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal
     if runs <= 1 or quiet:
         return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
                         keep_history=keep_history, spread=spread)
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
     cols = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
             TimeElapsedColumn())
     with Progress(*cols, console=Console(stderr=True), transient=True) as prog:
@@ -38,10 +39,10 @@ def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal
                         progress=lambda done: prog.update(task, completed=done))
 
 
-def rendered_outputs(result: SimResult) -> dict[str, bytes]:
+def rendered_outputs(result: SimResult, svg: bool = False) -> dict[str, bytes]:
     """The simulator's files, rendered in a scratch directory and read back (for all-or-nothing writes)."""
     with tempfile.TemporaryDirectory() as tmp:
-        paths = write_outputs(result, tmp)
+        paths = write_outputs(result, tmp, svg=svg)
         return {p.name: p.read_bytes() for p in paths}
 
 
@@ -98,12 +99,16 @@ def _p(d, key: str) -> str:
               help="Monte Carlo over the plant too: each run draws M, m, l, b_VF, c uniformly within this "
               "fraction of the spec's values (e.g. 10%).")
 @click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters --spread draws.")
+@click.option("--svg", is_flag=True, help="Also write the plot as history.svg (PNG only by default).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
-def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, as_json, force) -> None:
+def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, svg, as_json, force) -> None:
     """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
+    plot_helper.start()  # matplotlib loads on the other core while this one simulates
     spread = None
     if spread_text is not None:
+        from ..sweep import parse_by, parse_vary
+
         frac = parse_by(spread_text, "--spread")
         spread = {name: frac for name in parse_vary(vary)}
     d, machine = design_from_path(spec)
@@ -112,7 +117,7 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
     net = build_patch(d, machine)
     result = run_with_progress(net, plant_params(d.spec), bench, machine, scenario, seed=seed, runs=runs,
                                ideal=ideal, quiet=as_json, spread=spread)
-    files = rendered_outputs(result)
+    files = rendered_outputs(result, svg)
     files["netlist.json"] = net.to_json().encode()
     written = write_files(out_dir, files, force=force)
     if as_json:

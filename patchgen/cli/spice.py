@@ -12,6 +12,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from .. import plot_helper
 from ..bench import load_bench
 from ..model import plant_params
 from ..outputs import write_files
@@ -53,12 +54,14 @@ class _Own:
               help="Output step of the transient (s).")
 @click.option("--tolerance", type=click.FloatRange(min=0), default=0.01, show_default=True,
               help="Agreement required, as a fraction of each signal's peak.")
+@click.option("--svg", is_flag=True, help="Also write the overlay plot as overlay.svg (PNG only by default).")
 @click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
-def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, as_json, force) -> None:
+def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_json, force) -> None:
     """Export SPEC's patch and the bench as an ngspice deck, run it, and compare with patchgen's own
     simulation of the same scenario. Exit 0 when they agree within --tolerance, 1 when not,
     3 without ngspice (the deck is still written)."""
+    plot_helper.start()  # matplotlib loads on the other core while ngspice runs
     d, machine = design_from_path(spec)
     scenario = load_scenario(scenario_path)
     bench = load_bench(d.spec.bench, d.spec.path)
@@ -90,9 +93,9 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, as_json, f
     own = simulate(net, plant, bench, machine, scenario, ideal=ideal)
     cmp = compare(sp, _Own(own.history))
     with tempfile.TemporaryDirectory() as tmp:
-        plots = plot_comparison(cmp, Path(tmp) / "overlay", title=f"{d.spec.name}: ngspice vs patchgen "
-                                f"({scenario.name}{', ideal' if ideal else ''})")
-        for p in plots:
+        plots = plot_helper.submit(plot_comparison, cmp, Path(tmp) / "overlay", f"{d.spec.name}: ngspice vs "
+                                   f"patchgen ({scenario.name}{', ideal' if ideal else ''})", "patchgen", svg)
+        for p in plots.result():
             files[p.name] = p.read_bytes()
     report = {"design": d.spec.name, "scenario": scenario.name, "ideal": ideal, "tolerance": tolerance,
               "ngspice_run_time_s": sp.run_time_s,

@@ -11,6 +11,7 @@ import click
 from rich.console import Console
 from rich.table import Table
 
+from .. import plot_helper
 from ..bench import load_bench
 from ..manoeuvre import manoeuvre, plot_manoeuvre
 from ..model import plant_params
@@ -39,12 +40,14 @@ from .patch import patch_files
 @click.option("--seed", type=int, default=0, show_default=True, help="Noise seed of the hold.")
 @click.option("--compare", is_flag=True, help="Also compare the three strategies (time to the zone, cart "
               "excursion, success on plants off by +/-10%); takes about a minute.")
+@click.option("--svg", is_flag=True, help="Also write the plots as SVG (PNG only by default).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
-def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, as_json, force) -> None:
+def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg, as_json, force) -> None:
     """Pump SPEC's pendulum up from hanging at rest, hand it to the patched controller when the state
     enters the zone of the linear design, and hold it on the bench (actuator lag and dead zone,
     noise, drift)."""
+    plot_helper.start()  # matplotlib loads on the other core while this one computes
     d, machine = design_from_path(spec)
     net = build_patch(d, machine)
     bench = load_bench(d.spec.bench, d.spec.path)
@@ -63,12 +66,12 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, as_
                            "Switch times for the operator or a sequencer, from hanging at rest; hand off (IC -> OP) "
                            "when the pendulum is in the zone. Computed for this design's plant model: an open-loop "
                            "schedule is fragile, the supervisory logic re-times itself on the measured states.")
-    files = patch_files(d, machine, net, extra_sections=[section], runs_hold=10)
     with tempfile.TemporaryDirectory() as tmp:
-        for path in write_outputs(p, tmp):
-            files[path.name] = path.read_bytes()
-        for path in plot_manoeuvre(m, Path(tmp) / "manoeuvre", f"{d.spec.name}: {strategy} pump-up, "
-                                   f"hand-off at {p.handoff_time or float('nan'):.2f} s, patched hold"):
+        title = (f"{d.spec.name}: {strategy} pump-up, hand-off at {p.handoff_time or float('nan'):.2f} s, "
+                 "patched hold")
+        job = plot_helper.submit(pump_and_manoeuvre_files, p, m, tmp, title, svg)
+        files = patch_files(d, machine, net, extra_sections=[section], runs_hold=10)
+        for path in job.result():
             files[path.name] = path.read_bytes()
     if m.sensitivity is not None:
         summary["schedule_sensitivity"] = [{k: v.item() if hasattr(v, "item") else v for k, v in asdict(r).items()}
@@ -121,6 +124,11 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, as_
                       f"{r.robust_reached}/{r.robust_total}", _num(r.worst_time_s, "{:.2f}"))
         console.print(c)
     console.print("wrote " + ", ".join(str(x) for x in written))
+
+
+def pump_and_manoeuvre_files(p, m, out: str, title: str, svg: bool) -> list[Path]:
+    """The pump-up's files and the manoeuvre plot, written into ``out`` (by the plot helper)."""
+    return write_outputs(p, out, svg=svg) + plot_manoeuvre(m, Path(out) / "manoeuvre", title, svg)
 
 
 def _num(x, fmt: str) -> str:

@@ -1,0 +1,72 @@
+"""Plots as a screen or a page shows them: at most two points per pixel column, PNG by default.
+
+A 120 s history has 12,001 samples per trace; a plot 8 inches wide at 100 dpi has 800 pixel
+columns. :func:`envelope` keeps, of each column's samples, the smallest and the largest (in time
+order), so the line drawn through them covers every pixel the full trace would, spikes included,
+at an eighth of the points. :func:`save` writes the PNG, and the SVG copy only when asked for.
+matplotlib is imported here, by the commands that plot, never at start-up.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+PNG_DPI = 100
+SVG_RC = {"svg.fonttype": "path"}  # glyphs as paths: the same bytes on every machine
+
+
+def columns(fig, dpi: float = PNG_DPI) -> int:
+    """Pixel columns across the figure at ``dpi``."""
+    return int(round(fig.get_figwidth() * dpi))
+
+
+def envelope(t: np.ndarray, y: np.ndarray, cols: int) -> tuple[np.ndarray, np.ndarray]:
+    """(t, y) reduced to the first and last sample and, of each of ``cols`` runs of consecutive
+    samples, the smallest and the largest, in time order. Short traces are returned as they are."""
+    t, y = np.asarray(t), np.asarray(y)
+    n = y.size
+    if n <= 2 * cols:
+        return t, y
+    per = -(-n // cols)  # samples per column, the last column padded with the last sample
+    cols = -(-n // per)
+    blocks = np.concatenate([y, np.full(per * cols - n, y[-1])]).reshape(cols, per)
+    start = np.arange(cols) * per
+    ok = np.isfinite(blocks)  # a NaN or inf sample is kept as it is (a gap or a clip in the line)
+    keep = np.concatenate([[0, n - 1], start + np.where(ok, blocks, np.inf).argmin(axis=1),
+                           start + np.where(ok, blocks, -np.inf).argmax(axis=1), np.flatnonzero(~np.isfinite(y))])
+    idx = np.unique(np.minimum(keep, n - 1))
+    return t[idx], y[idx]
+
+
+def figure(width_in: float, height_in: float):
+    """A matplotlib Figure on the Agg canvas (no pyplot, no global state)."""
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width_in, height_in))
+
+
+def stacked(width_in: float, height_in: float, n: int, top_in: float = 0.4, bottom_in: float = 0.45,
+            left_in: float = 0.8, right_in: float = 0.15, hspace: float = 0.25):
+    """A figure of ``n`` panels one above the other sharing the time axis, with fixed margins in
+    inches (a layout engine would draw the figure several times to find them). Returns (fig, axes)."""
+    fig = figure(width_in, height_in)
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    fig.subplots_adjust(left=left_in / width_in, right=1 - right_in / width_in, top=1 - top_in / height_in,
+                        bottom=bottom_in / height_in, hspace=hspace)
+    return fig, axes
+
+
+def save(fig, png: Path, svg: Path | None = None, dpi: float = PNG_DPI, salt: str = "patchgen") -> list[Path]:
+    """Write the figure as PNG (no software tag) and, when ``svg`` is given, as a deterministic
+    SVG (fixed hash salt, no date). Returns the paths written."""
+    import matplotlib
+
+    fig.savefig(png, dpi=dpi, metadata={"Software": None})
+    paths = [Path(png)]
+    if svg is not None:
+        with matplotlib.rc_context({**SVG_RC, "svg.hashsalt": salt}):
+            fig.savefig(svg, metadata={"Date": None, "Creator": None})
+        paths.append(Path(svg))
+    return paths

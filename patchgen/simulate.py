@@ -30,6 +30,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from . import budget
 from .bench import BenchProfile
 from .circuit import Circuit, compile_circuit
 from .engine import (
@@ -177,6 +178,9 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     if not 0 <= base_seed < 2**63:
         raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")
     cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal, spread=spread)
+    budget.check(scenario, runs, step=cfg.dt, stride=cfg.stride, channels=circuit.n_sensors + circuit.n_amps,
+                 noisy=bool(cfg.sensor_noise_std.any() or cfg.amp_noise_std.any()), history=keep_history,
+                 threads=numba.get_num_threads(), usual_step=default_step([], ideal))
 
     # batches of runs: enough for the threads, few progress calls, bounded noise memory
     per_run = (cfg.n_steps + 1) * (circuit.n_sensors + circuit.n_amps) * 4
@@ -417,7 +421,7 @@ def write_outputs(result: SimResult, out_dir: str | Path) -> list[Path]:
     path.write_text(buf.getvalue())
     written.append(path)
     path = out / "summary.json"
-    path.write_text(json.dumps(result.summary(), indent=2, sort_keys=True) + "\n")
+    path.write_text(json.dumps(result.summary(), indent=2, sort_keys=True, allow_nan=False) + "\n")
     written.append(path)
     if result.history is not None:
         written += _plot(result, out)

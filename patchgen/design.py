@@ -84,6 +84,20 @@ def _stabilisable(A, B) -> bool:
     return True
 
 
+def _unstabilisable_part(spec: DesignSpec, model: LinearModel) -> tuple[str, str]:
+    """Which part makes the model not stabilisable: an integral state (its leak), else the plant."""
+    plant = tuple(s for s in model.states if not s.startswith("int_"))
+    Ap, Bp, _ = model.submodel(plant)
+    for name in (s for s in model.states if s.startswith("int_")):
+        A, B, _ = model.submodel(plant + (name,))
+        if _stabilisable(Ap, Bp) and not _stabilisable(A, B):
+            leak = getattr(spec.integrators, f"{name}_leak")
+            return (f"integrators.{name}_leak", f"with a leak of {leak:g} 1/s the integral state {name} makes the "
+                    "model not stabilisable: a pole on the axis the force cannot move (the default leak avoids it)")
+    return ("plant", "the model is not stabilisable: with these plant and actuator figures an unstable mode "
+            "cannot be moved by the force")
+
+
 def lqr(spec: DesignSpec, model: LinearModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Q, R, K, S of the regulator, with the checks a user needs named."""
     Q, R = q_matrix(spec), r_matrix(spec)
@@ -92,8 +106,7 @@ def lqr(spec: DesignSpec, model: LinearModel) -> tuple[np.ndarray, np.ndarray, n
         if spec.actuator.model == "lag_zero" and spec.actuator.zero == 0:
             raise spec.error("actuator.zero", "a zero exactly at the origin cancels the cart's position pole, "
                              "so the model is not stabilisable; move it off the axis (e.g. 1e-5)")
-        raise spec.error("plant", "the model is not stabilisable: with these plant and actuator figures an "
-                         "unstable mode cannot be moved by the force")
+        raise spec.error(*_unstabilisable_part(spec, model))
     ev, vec = np.linalg.eigh((Q + Q.T) / 2)
     H = (vec * np.sqrt(np.clip(ev, 0, None))) @ vec.T
     if not _stabilisable(A.T, H.T):

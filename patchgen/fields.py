@@ -12,12 +12,20 @@ them with their reasons.
 
 from __future__ import annotations
 
+import sys
 from typing import Annotated, Any
 
 from pydantic import AfterValidator, AllowInfNan, BaseModel, ConfigDict, Field, Strict
 
-Real = Annotated[float, Strict(), AllowInfNan(False)]
-"""A finite float (an integer is accepted and becomes a float)."""
+
+def _normal(v: float) -> float:
+    if v != 0 and abs(v) < sys.float_info.min:
+        raise ValueError(f"is too small to compute with (nonzero, below {sys.float_info.min:.3g}): use 0")
+    return v
+
+
+Real = Annotated[float, Strict(), AllowInfNan(False), AfterValidator(_normal)]
+"""A finite float, zero or a normal number (an integer is accepted and becomes a float)."""
 
 Int = Annotated[int, Strict()]
 """An integer (not a float, a string or a boolean)."""

@@ -226,14 +226,20 @@ def check_spec(spec: DesignSpec) -> None:
             for name, q in w.Q.items():
                 if name not in states:
                     raise err(f"weights.Q.{name}", f"unknown state name (states: {', '.join(states)})")
-                if not 0 <= q <= WEIGHT_RANGE[1]:
-                    raise err(f"weights.Q.{name}", f"must be >= 0 and at most {WEIGHT_RANGE[1]:g} (got {q:g})")
+                if not (q == 0 or WEIGHT_RANGE[0] <= q <= WEIGHT_RANGE[1]):
+                    raise err(f"weights.Q.{name}", f"must be >= 0: 0, or between {WEIGHT_RANGE[0]:g} and "
+                                                   f"{WEIGHT_RANGE[1]:g} (got {q:g})")
         else:
             Q = matrix(w.Q, "weights.Q", err)
             n = len(states)
             if Q.shape != (n, n):
                 raise err("weights.Q", f"must be {n}x{n} for states {', '.join(states)} "
                                        f"(got {Q.shape[0]}x{Q.shape[1]})")
+            tiny = np.argwhere((Q != 0) & (np.abs(Q) < WEIGHT_RANGE[0]))
+            if len(tiny):
+                i, j = tiny[0]
+                raise err(f"weights.Q[{i}][{j}]", f"a weight is 0 or at least {WEIGHT_RANGE[0]:g} in magnitude "
+                                                  f"(got {Q[i, j]:g})")
             if not np.allclose(Q, Q.T, atol=1e-12 * max(1.0, np.abs(Q).max())):
                 raise err("weights.Q", "must be symmetric")
             if np.linalg.eigvalsh(Q).min() < -1e-10 * max(1.0, np.abs(Q).max()):

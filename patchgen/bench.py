@@ -2,43 +2,41 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
+from .fields import InputModel, Real, bounded, zero_or_at_least
 from .validation import load_profile
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class BenchActuator(_Strict):
+class BenchActuator(InputModel):
     """Command voltage to force: K_U, lag (optional zero at the origin), dead zone, force limit."""
 
     model: Literal["gain", "lag", "lag_zero"]
-    K_U: float = Field(gt=0, description="N/V")
-    tau: float = Field(default=0.0, ge=0, description="s")
-    dead_zone_V: float = Field(default=0.0, ge=0)
-    force_limit_N: float = Field(gt=0)
+    K_U: Real = bounded(0.01, 1000, description="N/V")
+    tau: Annotated[Real, zero_or_at_least(1e-3)] = bounded(0, 10, default=0.0, description="s")
+    dead_zone_V: Real = bounded(0, 100, default=0.0)
+    force_limit_N: Real = bounded(0, 1e4, open_lo=True)
 
 
-class BenchSensors(_Strict):
+class BenchSensors(InputModel):
     """Sensor constants (V per SI unit) and their noise."""
 
-    s: float = Field(gt=0)
-    theta: float = Field(gt=0)
-    s_dot: float = Field(gt=0)
-    noise_V_rms: dict[Literal["s", "theta", "s_dot"], float] = Field(default_factory=dict)
-    noise_bandwidth_Hz: float = Field(default=200.0, gt=0)
+    s: Real = bounded(1e-3, 1e3)
+    theta: Real = bounded(1e-3, 1e3)
+    s_dot: Real = bounded(1e-3, 1e3)
+    noise_V_rms: dict[Literal["s", "theta", "s_dot"], Annotated[Real, Field(ge=0, le=100)]] = Field(
+        default_factory=dict)
+    noise_bandwidth_Hz: Real = bounded(1e-3, 1e9, default=200.0)
 
 
-class BenchTrack(_Strict):
+class BenchTrack(InputModel):
     limit_switches: bool = True
 
 
-class BenchProfile(_Strict):
-    id: str
+class BenchProfile(InputModel):
+    id: str = Field(min_length=1)
     name: str
     actuator: BenchActuator
     sensors: BenchSensors

@@ -13,6 +13,7 @@ import scipy.linalg as sla
 
 from .margins import Margins, loop_margins
 from .model import LinearModel, build_model, open_loop_poles, plant_zeros
+from .numerics import failing_as
 from .plant import PlantParams
 from .spec import DesignSpec, q_matrix, r_matrix
 
@@ -83,6 +84,20 @@ def _stabilisable(A, B) -> bool:
     return True
 
 
+def _unstabilisable_part(spec: DesignSpec, model: LinearModel) -> tuple[str, str]:
+    """Which part makes the model not stabilisable: an integral state (its leak), else the plant."""
+    plant = tuple(s for s in model.states if not s.startswith("int_"))
+    Ap, Bp, _ = model.submodel(plant)
+    for name in (s for s in model.states if s.startswith("int_")):
+        A, B, _ = model.submodel(plant + (name,))
+        if _stabilisable(Ap, Bp) and not _stabilisable(A, B):
+            leak = getattr(spec.integrators, f"{name}_leak")
+            return (f"integrators.{name}_leak", f"with a leak of {leak:g} 1/s the integral state {name} makes the "
+                    "model not stabilisable: a pole on the axis the force cannot move (the default leak avoids it)")
+    return ("plant", "the model is not stabilisable: with these plant and actuator figures an unstable mode "
+            "cannot be moved by the force")
+
+
 def lqr(spec: DesignSpec, model: LinearModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Q, R, K, S of the regulator, with the checks a user needs named."""
     Q, R = q_matrix(spec), r_matrix(spec)
@@ -91,11 +106,12 @@ def lqr(spec: DesignSpec, model: LinearModel) -> tuple[np.ndarray, np.ndarray, n
         if spec.actuator.model == "lag_zero" and spec.actuator.zero == 0:
             raise spec.error("actuator.zero", "a zero exactly at the origin cancels the cart's position pole, "
                              "so the model is not stabilisable; move it off the axis (e.g. 1e-5)")
-        raise spec.error("weights", "the model is not stabilisable: an unstable mode cannot be moved by the force")
+        raise spec.error(*_unstabilisable_part(spec, model))
     ev, vec = np.linalg.eigh((Q + Q.T) / 2)
     H = (vec * np.sqrt(np.clip(ev, 0, None))) @ vec.T
     if not _stabilisable(A.T, H.T):
-        raise spec.error("weights.Q", "(A, Q^1/2) is not detectable: weight the unstable modes (e.g. theta)")
+        field = "weights.bryson" if spec.weights.bryson is not None else "weights.Q"
+        raise spec.error(field, "(A, Q^1/2) is not detectable: weight the unstable modes (e.g. theta)")
     try:
         S = sla.solve_continuous_are(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError) as exc:
@@ -222,10 +238,19 @@ def _close_enough(lqg: Margins, lqr: Margins) -> bool:
 def design(spec: DesignSpec, plant: PlantParams | None = None, default_rolloff_s: float | None = None) -> Design:
     """Run the whole design for a spec (optionally on a perturbed plant, for sweeps)."""
     model = build_model(spec, plant)
-    Q, R, K, S = lqr(spec, model)
-    cl = np.linalg.eigvals(model.A - model.B @ K)
-    lqr_m = loop_margins(model.A, model.B, K)
-    zeros = {"s/F_U": plant_zeros(spec, "s"), "s_dot/F_U": plant_zeros(spec, "s_dot")}
+    with failing_as(spec.path, "weights", "the LQR design"):
+        Q, R, K, S = lqr(spec, model)
+        cl = np.linalg.eigvals(model.A - model.B @ K)
+        lqr_m = loop_margins(model.A, model.B, K)
+        zeros = {"s/F_U": plant_zeros(spec, "s"), "s_dot/F_U": plant_zeros(spec, "s_dot")}
+    with failing_as(spec.path, "estimator", f"the {spec.estimator.kind} estimator"):
+        est, ctl, lqg_m = _estimator(spec, model, K, lqr_m, default_rolloff_s)
+    return Design(spec, model, Q, R, K, S, _sort(cl), open_loop_poles(model), zeros, lqr_m, est, ctl, lqg_m)
+
+
+def _estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray, lqr_m: Margins,
+               default_rolloff_s: float | None) -> tuple[Estimator | None, Controller | None, Margins | None]:
+    """The spec's estimator, its controller and the loop margins with it (none: all None)."""
     est = ctl = None
     lqg_m = None
     e = spec.estimator
@@ -264,7 +289,7 @@ def design(spec: DesignSpec, plant: PlantParams | None = None, default_rolloff_s
     elif e.kind in ("filtered_differentiator", "reduced_observer"):
         est, ctl = _noise_shaped_estimator(spec, model, K)
         lqg_m = loop_margins(*loop_with_controller(model, ctl))
-    return Design(spec, model, Q, R, K, S, _sort(cl), open_loop_poles(model), zeros, lqr_m, est, ctl, lqg_m)
+    return est, ctl, lqg_m
 
 
 def _noise_shaped_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray):

@@ -14,6 +14,10 @@ class InputError(Exception):
         self.message = message
         super().__init__(self.line())
 
+    def __reduce__(self):
+        # rebuilt from its three parts (a sweep's worker process sends it back pickled)
+        return (type(self), (self.source, self.field, self.message))
+
     def line(self) -> str:
         where = f"{self.source}: {self.field}" if self.field else self.source
         return f"{where}: {self.message}"

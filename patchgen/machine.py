@@ -2,71 +2,76 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
+from .errors import InputError
+from .fields import InputModel, Int, Real, bounded
 from .validation import load_profile
 
 Role = Literal["integrator", "summer", "inverter", "differentiator"]
+MAX_UNITS = 16  # slaved machines in one profile
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class AmplifierSlot(_Strict):
+class AmplifierSlot(InputModel):
     """One physical amplifier on the panel and what it can be patched as."""
 
-    id: str
-    roles: list[Role]
-    inputs: dict[str, int] = Field(description="count of inputs per weight, keys 'x1', 'x10'")
+    id: str = Field(min_length=1)
+    roles: list[Role] = Field(min_length=1)
+    inputs: dict[str, Annotated[Int, Field(ge=0, le=100)]] = Field(
+        description="count of inputs per weight, keys 'x1', 'x10'")
 
     def input_count(self, weight: int) -> int:
         return self.inputs.get(f"x{weight}", 0)
 
 
-class Components(_Strict):
+OHM = (1.0, 1e12)
+FARAD = (1e-15, 1.0)
+
+
+class Components(InputModel):
     """Passive parts behind the panel (for the SPICE export)."""
 
-    input_resistor_x1_ohm: float = Field(gt=0)
-    input_resistor_x10_ohm: float = Field(gt=0)
-    feedback_resistor_ohm: float = Field(gt=0)
-    integrator_capacitor_F: float = Field(gt=0)
-    pot_resistance_ohm: float = Field(gt=0)
-    differentiator_capacitor_F: float = Field(gt=0)
-    opamp_open_loop_gain: float = Field(gt=1)
-    opamp_output_resistance_ohm: float = Field(ge=0)
+    input_resistor_x1_ohm: Real = bounded(*OHM)
+    input_resistor_x10_ohm: Real = bounded(*OHM)
+    feedback_resistor_ohm: Real = bounded(*OHM)
+    integrator_capacitor_F: Real = bounded(*FARAD)
+    pot_resistance_ohm: Real = bounded(*OHM)
+    differentiator_capacitor_F: Real = bounded(*FARAD)
+    opamp_open_loop_gain: Real = bounded(1, 1e12, open_lo=True)
+    opamp_output_resistance_ohm: Real = bounded(0, 1e6)
 
 
-class Imperfections(_Strict):
+class Imperfections(InputModel):
     """What makes the real machine differ from ideal elements (for the simulators)."""
 
-    integrator_offset_V: float = Field(ge=0)
-    integrator_bias_A: float = Field(ge=0)
-    saturation_V: float = Field(gt=0)
-    amplifier_noise_V_rms: float = Field(ge=0)
-    noise_bandwidth_Hz: float = Field(gt=0)
-    differentiator_rolloff_s: float = Field(gt=0)
+    integrator_offset_V: Real = bounded(0, 1)
+    integrator_bias_A: Real = bounded(0, 1e-3)
+    saturation_V: Real = bounded(0, 1000, open_lo=True)
+    amplifier_noise_V_rms: Real = bounded(0, 10)
+    noise_bandwidth_Hz: Real = bounded(1e-3, 1e9)
+    differentiator_rolloff_s: Real = bounded(1e-4, 1)
 
 
-class MachineProfile(_Strict):
+class MachineProfile(InputModel):
     """A whole machine: read from patchgen/machines/<id>.toml or a user path."""
 
-    id: str
+    id: str = Field(min_length=1)
     name: str
-    reference_V: float = Field(gt=0)
-    time_scale_s: float = Field(gt=0)
-    pot_count: int = Field(ge=0)
-    pot_resolution: float = Field(gt=0, lt=1)
-    pot_max: float = Field(gt=0)
-    input_weights: list[int]
+    reference_V: Real = bounded(0, 1000, open_lo=True)
+    time_scale_s: Real = bounded(1e-6, 1e6)
+    pot_count: Int = bounded(0, 1000)
+    pot_resolution: Real = bounded(1e-9, 0.5)
+    pot_max: Real = bounded(0, 100, open_lo=True)
+    input_weights: list[Annotated[Int, Field(ge=1, le=1000)]] = Field(min_length=1, max_length=10)
     ic_mode: str
     pot_set_mode: str
     overload_indicator: bool
-    max_units: int = Field(ge=1)
-    units: int = Field(default=1, ge=1, description="machines slaved together in this profile (see slaved())")
-    amplifiers: list[AmplifierSlot]
+    max_units: Int = bounded(1, MAX_UNITS)
+    units: Int = bounded(1, MAX_UNITS, default=1,
+                         description="machines slaved together in this profile (see slaved())")
+    amplifiers: list[AmplifierSlot] = Field(min_length=1, max_length=1000)
     components: Components
     imperfections: Imperfections
 
@@ -87,4 +92,18 @@ class MachineProfile(_Strict):
 
 def load_machine(name_or_path: str, source: str = "", field: str = "machine") -> MachineProfile:
     """Load a shipped profile by id (e.g. 'gp6') or a profile file by path."""
-    return load_profile(MachineProfile, name_or_path, "machine", source, field)
+    return load_profile(MachineProfile, name_or_path, "machine", source, field, check=_check_amplifiers)
+
+
+def _check_amplifiers(profile: MachineProfile, source: str) -> None:
+    """Amplifier ids are unique and their input keys name the profile's weights."""
+    keys = {f"x{w}" for w in profile.input_weights}
+    seen: set[str] = set()
+    for i, a in enumerate(profile.amplifiers):
+        if a.id in seen:
+            raise InputError(source, f"amplifiers[{i}].id", f"{a.id!r} is used twice")
+        seen.add(a.id)
+        for k in a.inputs:
+            if k not in keys:
+                raise InputError(source, f"amplifiers[{i}].inputs.{k}",
+                                 f"not an input weight of this machine (input_weights give {', '.join(sorted(keys))})")

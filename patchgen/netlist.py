@@ -129,7 +129,7 @@ class Netlist(_Doc):
 
     def to_json(self) -> str:
         """Deterministic JSON text (sorted keys, fixed indentation, trailing newline)."""
-        return json.dumps(self.model_dump(mode="json", by_alias=True), indent=2, sort_keys=True) + "\n"
+        return json.dumps(self.model_dump(mode="json", by_alias=True), indent=2, sort_keys=True, allow_nan=False) + "\n"
 
 
 def read_netlist(path: str | Path) -> Netlist:

@@ -72,6 +72,17 @@ class Job:
         self._conn = None
 
 
+def stop() -> None:
+    """Let a started helper that got no job go (a command that failed before it plotted)."""
+    global _helper
+    if _helper is not None:
+        proc, conn = _helper
+        _helper = None
+        conn.close()
+        proc.terminate()  # it holds nothing of ours; a fork may share the pipe, so do not wait on EOF
+        proc.join(timeout=5)
+
+
 def submit(fn: Callable, *args) -> Job:
     """fn(*args) in the helper if one was started, else here when ``result()`` is asked for."""
     return Job(fn, args)

@@ -50,12 +50,20 @@ def resolve(kind: str, name_or_path: str | Path, source: str = "", field: str = 
     """
     text = str(name_or_path)
     path = Path(text)
-    if text and (path.exists() or path.suffix or "/" in text or "\\" in text):
+    if text and (_exists(path) or path.suffix or "/" in text or "\\" in text or "\0" in text):
         return path
     f = folder(kind).joinpath(f"{text}.toml")
-    if text and f.is_file():
+    if text and _exists(f):
         return f
     known = ", ".join(shipped(kind))
     if source:
         raise InputError(source, field, f"unknown {kind} {text!r} (known: {known})")
     raise InputError(text or "''", field, f"no such file, and no shipped {kind} of that name (shipped: {known})")
+
+
+def _exists(path: Path | Traversable) -> bool:
+    """Whether anything is at path; a name the OS refuses (too long, say) is left for the reader to name."""
+    try:
+        return path.exists() if isinstance(path, Path) else path.is_file()
+    except (OSError, ValueError):
+        return isinstance(path, Path)

@@ -29,7 +29,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from . import plot_helper
+from . import budget, plot_helper
 from .bench import BenchProfile
 from .circuit import Circuit, compile_circuit
 from .engine import (
@@ -178,6 +178,8 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     if not 0 <= base_seed < 2**63:
         raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")
     cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal, spread=spread)
+    budget.check(scenario, runs, step=cfg.dt, stride=cfg.stride, history=keep_history,
+                 usual_step=default_step([], ideal))
 
     # batches of runs, for the progress calls: whole blocks, enough of them for the threads
     per_call = LANES * numba.get_num_threads()
@@ -412,7 +414,7 @@ def write_outputs(result: SimResult, out_dir: str | Path, svg: bool = False) -> 
     path.write_text(buf.getvalue())
     written.append(path)
     path = out / "summary.json"
-    path.write_text(json.dumps(result.summary(), indent=2, sort_keys=True) + "\n")
+    path.write_text(json.dumps(result.summary(), indent=2, sort_keys=True, allow_nan=False) + "\n")
     written.append(path)
     if plot is not None:
         written += plot.result()

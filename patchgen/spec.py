@@ -8,88 +8,104 @@ profile named by ``bench`` (patchgen/benches/), kept apart on purpose.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, PrivateAttr
+from pydantic import Field, PrivateAttr
 
 from .errors import InputError
+from .fields import InputModel, Int, Real, bounded, zero_or_at_least
 from .resources import resolve
 from .validation import read_toml, validate
 
 PLANT_STATES = ("s", "theta", "s_dot", "theta_dot")
 MEASURED = ("s", "theta", "s_dot")
 
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-class PlantSpec(_Strict):
-    """Table B.1 parameters, SI units."""
-
-    M: float = Field(gt=0, description="cart mass, kg")
-    m: float = Field(gt=0, description="pendulum mass, kg")
-    l: float = Field(gt=0, description="effective pendulum length, m")
-    g: float = Field(default=9.807, gt=0, description="gravity, m/s^2")
-    b_VF: float = Field(ge=0, description="cart viscous friction, kg/s")
-    c: float = Field(ge=0, description="pendulum rotational friction, kg m^2/s")
-    d: float = Field(default=1.090, gt=0, description="usable track length between the switches, m")
+# weights: Q entries and R within WEIGHT_RANGE (a weight is relative, and a spread of more than
+# 1e16 between them leaves the Riccati solver little but rounding error); Bryson excursions
+# within EXCURSION_RANGE (their squares' inverses then stay inside WEIGHT_RANGE)
+WEIGHT_RANGE = (1e-8, 1e8)
+EXCURSION_RANGE = (1e-4, 1e4)
+NOISE_MAX = 1e12  # entries of the estimator's W and V
+GAMMA_MAX = 1e6  # entries of the noise input matrix Gamma
+MIN_V_EIGENVALUE = 1e-12  # the measurement noise is inverted: it must be clear of singular
+Entry = Annotated[Real, Field(ge=-NOISE_MAX, le=NOISE_MAX)]
+Weight = Annotated[Real, Field(ge=-WEIGHT_RANGE[1], le=WEIGHT_RANGE[1])]
 
 
-class SensorSpec(_Strict):
+class PlantSpec(InputModel):
+    """Table B.1 parameters, SI units, within the bounds of a bench-sized cart and pendulum."""
+
+    M: Real = bounded(0.01, 100, description="cart mass, kg (10 g to 100 kg)")
+    m: Real = bounded(1e-3, 10, description="pendulum mass, kg (1 g to 10 kg)")
+    l: Real = bounded(0.01, 10, description="effective pendulum length, m (1 cm to 10 m)")
+    g: Real = bounded(1, 30, default=9.807, description="gravity, m/s^2 (the Moon's 1.6 to Jupiter's 25)")
+    b_VF: Real = bounded(0, 1000, description="cart viscous friction, kg/s")
+    c: Real = bounded(0, 10, description="pendulum rotational friction, kg m^2/s")
+    d: Real = bounded(0.05, 20, default=1.090, description="usable track length between the switches, m")
+
+
+SENSOR_RANGE = (1e-3, 1e3)  # V per SI unit: a millivolt to a kilovolt per metre, radian, m/s
+
+
+class SensorSpec(InputModel):
     """Sensor constants (table A.2), volts per SI unit. theta_dot is the scale of the voltage
     that carries theta_dot on the machine (differentiator or estimator output)."""
 
-    s: float = Field(gt=0, description="V/m")
-    theta: float = Field(gt=0, description="V/rad")
-    s_dot: float = Field(gt=0, description="V/(m/s)")
-    theta_dot: float | None = Field(default=None, gt=0, description="V/(rad/s); default theta x 1 s")
+    s: Real = bounded(*SENSOR_RANGE, description="V/m")
+    theta: Real = bounded(*SENSOR_RANGE, description="V/rad")
+    s_dot: Real = bounded(*SENSOR_RANGE, description="V/(m/s)")
+    theta_dot: Real | None = bounded(*SENSOR_RANGE, default=None, description="V/(rad/s); default theta x 1 s")
 
 
-class ActuatorSpec(_Strict):
+MIN_LAG_S = 1e-3  # a lag shorter than 1 ms is a gain to the loop, and would set a needlessly fine step
+
+
+class ActuatorSpec(InputModel):
     """The actuator model the design assumes: force per command volt, with optional lag."""
 
     model: Literal["gain", "lag", "lag_zero"] = "gain"
-    K_U: float = Field(gt=0, description="N/V (N s/V for lag_zero)")
-    tau: float = Field(default=0.0, ge=0, description="lag time constant, s")
-    state_scale: float = Field(default=1.0, gt=0, description="actuator state = F_U / state_scale")
-    zero: float = Field(default=1e-5, ge=0, description="lag_zero: F/F_cmd = (s + zero)/(tau s + 1), rad/s; "
-                        "a zero exactly at 0 cancels the cart's position pole (not stabilisable)")
-    dead_zone_V: float = Field(default=0.0, ge=0, description="not seen by a linear design; reported")
+    K_U: Real = bounded(0.01, 1000, description="N/V (N s/V for lag_zero)")
+    tau: Annotated[Real, zero_or_at_least(MIN_LAG_S)] = bounded(0, 10, default=0.0,
+                                                               description="lag time constant, s")
+    state_scale: Real = bounded(1e-3, 1e3, default=1.0, description="actuator state = F_U / state_scale")
+    zero: Real = bounded(0, 1e3, default=1e-5, description="lag_zero: F/F_cmd = (s + zero)/(tau s + 1), rad/s; "
+                         "a zero exactly at 0 cancels the cart's position pole (not stabilisable)")
+    dead_zone_V: Real = bounded(0, 100, default=0.0, description="not seen by a linear design; reported")
 
 
-class WeightsSpec(_Strict):
+class WeightsSpec(InputModel):
     """LQR weights: Q (diagonal by state name, or a full matrix in state order) and R, or
     Bryson's maximum excursions (eq. 4.9-4.10)."""
 
-    Q: dict[str, float] | list[list[float]] | None = None
-    R: float | None = None
-    bryson: dict[str, float] | None = None
+    Q: dict[str, Real] | list[list[Weight]] | None = None
+    R: Real | None = None
+    bryson: dict[str, Real] | None = None
 
 
-class IntegratorsSpec(_Strict):
+class IntegratorsSpec(InputModel):
     int_s: bool = False
     int_theta: bool = False
-    int_s_leak: float = Field(default=2e-5, ge=0, description="1/s, keeps the Riccati solver off the axis")
-    int_theta_leak: float = Field(default=1e-5, ge=0, description="1/s")
+    int_s_leak: Real = bounded(0, 1, default=2e-5, description="1/s, keeps the Riccati solver off the axis")
+    int_theta_leak: Real = bounded(0, 1, default=1e-5, description="1/s")
 
 
-class EstimatorSpec(_Strict):
+class EstimatorSpec(InputModel):
     kind: Literal["none", "differentiator", "filtered_differentiator", "reduced_observer", "kalman"] = "none"
-    W: float | list[list[float]] = 1.0
-    V: list[float] | list[list[float]] = [1.0, 1.0, 1.0]
-    Gamma: Literal["B"] | list[float] | list[list[float]] = "B"
-    rho: float | Literal["auto"] = 1.0
-    rho_max: float = Field(default=1e12, gt=0)
-    rolloff_s: float | None = Field(default=None, gt=0, description="differentiator roll-off, s "
-                                    "(filtered_differentiator: none = chosen from the bench noise)")
-    observer_pole: float | None = Field(default=None, gt=0, description="reduced_observer: error decay "
-                                        "rate, rad/s (none = chosen from the bench noise)")
+    W: Entry | list[list[Entry]] = 1.0
+    V: list[Entry] | list[list[Entry]] = [1.0, 1.0, 1.0]
+    Gamma: Literal["B"] | list[Annotated[Real, Field(ge=-GAMMA_MAX, le=GAMMA_MAX)]] | list[
+        list[Annotated[Real, Field(ge=-GAMMA_MAX, le=GAMMA_MAX)]]] = "B"
+    rho: Annotated[Real, Field(gt=0, le=1e12)] | Literal["auto"] = 1.0
+    rho_max: Real = bounded(0, 1e12, open_lo=True, default=1e12)
+    rolloff_s: Real | None = bounded(1e-4, 1, default=None, description="differentiator roll-off, s "
+                                     "(filtered_differentiator: none = chosen from the bench noise)")
+    observer_pole: Real | None = bounded(1e-2, 1e4, default=None, description="reduced_observer: error decay "
+                                         "rate, rad/s (none = chosen from the bench noise)")
 
 
-class PatchSpec(_Strict):
-    units: int | Literal["auto"] = Field(
+class PatchSpec(InputModel):
+    units: Annotated[Int, Field(ge=1, le=16)] | Literal["auto"] = Field(
         default=1, description="machines slaved together: a number, or \"auto\" for the fewest that fit "
         "(at most the profile's max_units)")
     below_resolution: Literal["round", "minimum", "omit"] = Field(
@@ -97,7 +113,7 @@ class PatchSpec(_Strict):
         "set the minimum dial value, or leave the signal out")
 
 
-class DesignSpec(_Strict):
+class DesignSpec(InputModel):
     name: str
     description: str = ""
     source: str = ""
@@ -170,6 +186,23 @@ def r_matrix(spec: DesignSpec) -> np.ndarray:
     return np.array([[float(w.R)]])
 
 
+def matrix(rows: list[list[float]], field: str, err) -> np.ndarray:
+    """A list of rows as a 2-D array; an empty or ragged matrix is named at the row at fault."""
+    if not rows or not rows[0]:
+        raise err(field, "an empty matrix")
+    for i, row in enumerate(rows):
+        if len(row) != len(rows[0]):
+            raise err(f"{field}[{i}]", f"has {len(row)} values where row 0 has {len(rows[0])} "
+                                       "(a matrix needs rows of one length)")
+    return np.array(rows, dtype=float)
+
+
+def _in_range(value: float, field: str, bounds: tuple[float, float], what: str, err) -> None:
+    lo, hi = bounds
+    if not lo <= value <= hi:
+        raise err(field, f"{what} must be positive, between {lo:g} and {hi:g} (got {value:g})")
+
+
 def check_spec(spec: DesignSpec) -> None:
     """Checks that need more than one field: weights against the states, estimator shapes."""
     states = spec.states()
@@ -181,8 +214,7 @@ def check_spec(spec: DesignSpec) -> None:
         for name, sigma in w.bryson.items():
             if name != "u" and name not in states:
                 raise err(f"weights.bryson.{name}", f"unknown state name (states: {', '.join(states)})")
-            if not (sigma > 0 and np.isfinite(sigma)):
-                raise err(f"weights.bryson.{name}", f"maximum excursion must be positive (got {sigma!r})")
+            _in_range(sigma, f"weights.bryson.{name}", EXCURSION_RANGE, "a maximum excursion", err)
         if "u" not in w.bryson:
             raise err("weights.bryson.u", "missing field (maximum control force, N)")
     else:
@@ -194,45 +226,56 @@ def check_spec(spec: DesignSpec) -> None:
             for name, q in w.Q.items():
                 if name not in states:
                     raise err(f"weights.Q.{name}", f"unknown state name (states: {', '.join(states)})")
-                if not (q >= 0 and np.isfinite(q)):
-                    raise err(f"weights.Q.{name}", f"must be >= 0 (got {q!r})")
+                if not (q == 0 or WEIGHT_RANGE[0] <= q <= WEIGHT_RANGE[1]):
+                    raise err(f"weights.Q.{name}", f"must be >= 0: 0, or between {WEIGHT_RANGE[0]:g} and "
+                                                   f"{WEIGHT_RANGE[1]:g} (got {q:g})")
         else:
-            Q = np.array(w.Q, dtype=float)
+            Q = matrix(w.Q, "weights.Q", err)
             n = len(states)
             if Q.shape != (n, n):
-                cols = Q.shape[1] if Q.ndim > 1 else 0
-                raise err("weights.Q", f"must be {n}x{n} for states {', '.join(states)} (got {Q.shape[0]}x{cols})")
+                raise err("weights.Q", f"must be {n}x{n} for states {', '.join(states)} "
+                                       f"(got {Q.shape[0]}x{Q.shape[1]})")
+            tiny = np.argwhere((Q != 0) & (np.abs(Q) < WEIGHT_RANGE[0]))
+            if len(tiny):
+                i, j = tiny[0]
+                raise err(f"weights.Q[{i}][{j}]", f"a weight is 0 or at least {WEIGHT_RANGE[0]:g} in magnitude "
+                                                  f"(got {Q[i, j]:g})")
             if not np.allclose(Q, Q.T, atol=1e-12 * max(1.0, np.abs(Q).max())):
                 raise err("weights.Q", "must be symmetric")
             if np.linalg.eigvalsh(Q).min() < -1e-10 * max(1.0, np.abs(Q).max()):
                 raise err("weights.Q", "must be positive semi-definite")
-        if not (w.R > 0 and np.isfinite(w.R)):
-            raise err("weights.R", f"must be positive (got {w.R!r})")
+        _in_range(w.R, "weights.R", WEIGHT_RANGE, "a control weight", err)
     a = spec.actuator
     if a.model != "gain" and a.tau <= 0:
-        raise err("actuator.tau", f"a {a.model} actuator needs a positive time constant")
+        raise err("actuator.tau", f"a {a.model} actuator needs a positive time constant (at least {MIN_LAG_S:g} s)")
+    if spec.estimator.kind == "kalman":
+        _check_kalman(spec, 4 + (1 if a.model != "gain" else 0))
+
+
+def _check_kalman(spec: DesignSpec, n_est: int) -> None:
+    """Shapes and definiteness of the Kalman estimator's noise model."""
     e = spec.estimator
-    if e.kind == "kalman":
-        n_est = 4 + (1 if a.model != "gain" else 0)
-        W = np.atleast_2d(np.array(e.W, dtype=float))
-        if isinstance(e.Gamma, str):
-            n_w = 1
-        else:
-            G = np.array(e.Gamma, dtype=float)
-            if G.ndim == 1:
-                G = G[:, None]
-            if G.shape[0] != n_est:
-                raise err("estimator.Gamma", f"needs {n_est} rows (estimated states), got {G.shape[0]}")
-            n_w = G.shape[1]
-        if W.shape != (n_w, n_w):
-            raise err("estimator.W", f"must be {n_w}x{n_w} to match Gamma (got {W.shape[0]}x{W.shape[1]})")
-        if np.linalg.eigvalsh((W + W.T) / 2).min() < 0:
-            raise err("estimator.W", "must be positive semi-definite")
-        V = np.array(e.V, dtype=float)
-        V = np.diag(V) if V.ndim == 1 else V
-        if V.shape != (3, 3):
-            raise err("estimator.V", f"must be 3 values or 3x3 for the measured {', '.join(MEASURED)}")
-        if np.linalg.eigvalsh((V + V.T) / 2).min() <= 0:
-            raise err("estimator.V", "must be positive definite")
-        if isinstance(e.rho, float) and not (e.rho > 0):
-            raise err("estimator.rho", f"must be positive or \"auto\" (got {e.rho!r})")
+    err = spec.error
+    W = np.atleast_2d(e.W) if isinstance(e.W, float) else matrix(e.W, "estimator.W", err)
+    if isinstance(e.Gamma, str):
+        n_w = 1
+    elif not e.Gamma:
+        raise err("estimator.Gamma", "an empty matrix")
+    else:
+        G = np.array(e.Gamma, dtype=float)[:, None] if not isinstance(e.Gamma[0], list) else \
+            matrix(e.Gamma, "estimator.Gamma", err)
+        if G.shape[0] != n_est:
+            raise err("estimator.Gamma", f"needs {n_est} rows (estimated states), got {G.shape[0]}")
+        n_w = G.shape[1]
+    if W.shape != (n_w, n_w):
+        raise err("estimator.W", f"must be {n_w}x{n_w} to match Gamma (got {W.shape[0]}x{W.shape[1]})")
+    if np.linalg.eigvalsh((W + W.T) / 2).min() < 0:
+        raise err("estimator.W", "must be positive semi-definite")
+    if e.V and isinstance(e.V[0], list):
+        V = matrix(e.V, "estimator.V", err)
+    else:
+        V = np.diag(np.array(e.V, dtype=float)) if e.V else np.zeros((0, 0))
+    if V.shape != (3, 3):
+        raise err("estimator.V", f"must be 3 values or 3x3 for the measured {', '.join(MEASURED)}")
+    if np.linalg.eigvalsh((V + V.T) / 2).min() < MIN_V_EIGENVALUE:
+        raise err("estimator.V", f"must be positive definite (smallest eigenvalue at least {MIN_V_EIGENVALUE:g})")

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import math
+import re
 import tomllib
+from collections.abc import Callable
 from importlib.resources.abc import Traversable
 from pathlib import Path
 from typing import Any, TypeVar
@@ -10,23 +13,30 @@ from typing import Any, TypeVar
 from pydantic import BaseModel, ValidationError
 
 from .errors import InputError
+from .inputfile import decode_text, read_bytes
 from .resources import resolve
 
 M = TypeVar("M", bound=BaseModel)
 
+# the parts of a pydantic location that name a union member or a validator, not a field
+_TAG = re.compile(r"^[a-z][a-z-]*\[.*\]$|^(float|int|str|bool|list|dict|none|constrained-float|constrained-int"
+                  r"|\[key\])$")
+
 
 def read_toml(path: str | Path | Traversable) -> dict[str, Any]:
-    """Parse a TOML file (a path or a shipped resource); a missing file or a syntax error is an InputError."""
-    p = path if isinstance(path, Traversable) else Path(path)
+    """Parse a TOML file (a path or a shipped resource); any problem with the file is an InputError."""
+    return parse_toml(read_bytes(path), str(path))
+
+
+def parse_toml(data: bytes, source: str) -> dict[str, Any]:
+    """The TOML document in ``data`` (UTF-8); a syntax error names its line and column."""
+    text = decode_text(data, source)
     try:
-        with p.open("rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise InputError(str(path), "", "no such file") from None
-    except IsADirectoryError:
-        raise InputError(str(path), "", "is a directory, not a TOML file") from None
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(str(path), "", f"not valid TOML ({exc})") from None
+        raise InputError(source, "", f"not valid TOML ({exc})") from None
+    except RecursionError:
+        raise InputError(source, "", "not valid TOML (nested too deeply)") from None
 
 
 def field_path(loc: tuple) -> str:
@@ -40,35 +50,89 @@ def field_path(loc: tuple) -> str:
     return out
 
 
+def _fields(loc: tuple) -> tuple:
+    return tuple(p for p in loc if not (isinstance(p, str) and _TAG.match(p)))
+
+
+def _shown(v: Any) -> str:
+    """An input value as it would be written in TOML."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float) and not math.isfinite(v):
+        return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+_BOUNDS = {"greater_than": ("gt", "must be greater than"), "greater_than_equal": ("ge", "must be at least"),
+           "less_than": ("lt", "must be less than"), "less_than_equal": ("le", "must be at most")}
+_TYPES = {"float_type": "must be a number", "int_type": "must be an integer", "bool_type": "must be true or false",
+          "string_type": "must be a string", "finite_number": "must be a finite number (not inf or nan)",
+          "int_from_float": "must be an integer", "list_type": "must be a list", "dict_type": "must be a table",
+          "model_type": "must be a table", "model_attributes_type": "must be a table",
+          "extra_forbidden": "unknown field", "missing": "missing field"}
+
+
+def _message(err: dict) -> str:
+    kind = err["type"]
+    if kind in _BOUNDS:
+        key, words = _BOUNDS[kind]
+        limit = err.get("ctx", {}).get(key)
+        return f"{words} {limit:g}" if isinstance(limit, (int, float)) else err["msg"]
+    if kind in _TYPES:
+        return _TYPES[kind]
+    msg = err["msg"]
+    if kind == "literal_error":
+        return "must be " + msg.removeprefix("Input should be ")
+    return msg.removeprefix("Value error, ")
+
+
+def _chosen(errors: list[dict]) -> tuple[tuple, str, Any]:
+    """The first problem, as field path, message and offending input. When it comes from a union
+    (a number or "auto", a table or a matrix), the member that got deepest into the input says
+    what is wrong; members failing at the same place are joined ("a number or 'auto'")."""
+    first = errors[0]
+    raw = first["loc"]
+    cut = next((i for i, p in enumerate(raw) if isinstance(p, str) and _TAG.match(p)), None)
+    group = [first] if cut is None else [e for e in errors if tuple(e["loc"][:cut]) == tuple(raw[:cut])]
+    depth = max(len(_fields(e["loc"])) for e in group)
+    deepest = [e for e in group if len(_fields(e["loc"])) == depth]
+    loc = _fields(deepest[0]["loc"])
+    msgs: list[str] = []
+    for e in deepest:
+        m = _message(e)
+        if msgs and m.startswith("must be ") and msgs[0].startswith("must be "):
+            m = m.removeprefix("must be ")
+        if m not in msgs and "must be " + m not in msgs:
+            msgs.append(m)
+    return loc, " or ".join(msgs), deepest[0]
+
+
 def validate(model: type[M], data: Any, source: str, prefix: str = "") -> M:
     """Validate data against a pydantic model, raising the first problem as one line."""
     try:
         return model.model_validate(data)
     except ValidationError as exc:
-        err = exc.errors()[0]
-        loc = tuple(p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-")))
-        # pydantic puts the union member or validator name in loc; keep the field names only
-        type_names = ("float", "int", "str", "bool", "list", "dict")
-        loc = tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p in type_names)))
+        loc, msg, err = _chosen(exc.errors())
         where = field_path(loc)
         if prefix:
             where = f"{prefix}.{where}" if where else prefix
-        msg = err["msg"]
-        if err["type"] == "extra_forbidden":
-            msg = "unknown field"
-        elif err["type"] == "missing":
-            msg = "missing field"
-        elif msg.startswith("Value error, "):
-            msg = msg[len("Value error, "):]
         got = err.get("input")
-        if err["type"] not in ("missing", "extra_forbidden") and isinstance(got, (int, float, str, bool)):
-            msg = f"{msg} (got {got!r})"
+        if (err["type"] not in ("missing", "extra_forbidden") and isinstance(got, (int, float, str, bool))
+                and "(got " not in msg):
+            msg = f"{msg} (got {_shown(got)})"
         raise InputError(source, where, msg) from None
 
 
-def load_profile(model: type[M], name_or_path: str, kind: str, source: str, field: str) -> M:
-    """A shipped profile by id (``uw-1991``) or any profile file by path."""
+def load_profile(model: type[M], name_or_path: str, kind: str, source: str, field: str,
+                 check: Callable[[M, str], None] | None = None) -> M:
+    """A shipped profile by id (``uw-1991``) or any profile file by path. A path that cannot be
+    read is named against the field that gave it; a bad profile names the profile's own field
+    (``check`` adds the checks that need more than one field)."""
     path = resolve(kind, name_or_path, source, field)
-    if isinstance(path, Path) and not path.is_file():
-        raise InputError(source or name_or_path, field, f"no {kind} profile file {name_or_path!r}")
-    return validate(model, read_toml(path), str(name_or_path) if not isinstance(path, Path) else str(path))
+    data = read_bytes(path, named_by=(source, field, f"{kind} profile") if source else None)
+    label = str(path) if isinstance(path, Path) else str(name_or_path)
+    profile = validate(model, parse_toml(data, label), label)
+    if check is not None:
+        check(profile, label)
+    return profile

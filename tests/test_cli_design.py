@@ -52,8 +52,8 @@ BASE = (DESIGNS / "thesis-case1.toml").read_text()
 
 
 @pytest.mark.parametrize("edit,field,words", [
-    (lambda t: t.replace("M = 3.552", "M = -3.552"), "plant.M", "greater than 0"),
-    (lambda t: t.replace("l = 0.429", "l = 0"), "plant.l", "greater than 0"),
+    (lambda t: t.replace("M = 3.552", "M = -3.552"), "plant.M", "at least"),
+    (lambda t: t.replace("l = 0.429", "l = 0"), "plant.l", "at least"),
     (lambda t: t.replace("M = 3.552", "M = \"heavy\""), "plant.M", "number"),
     (lambda t: re.sub(r"(?m)^M = .*\n", "", t), "plant.M", "missing"),
     (lambda t: t.replace("[plant]", "[plant]\nmass_of_moon = 7"), "plant.mass_of_moon", "unknown field"),

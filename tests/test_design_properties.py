@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from patchgen.design import design
 from patchgen.spec import DesignSpec, check_spec
 
-pos = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False)
+pos = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False).map(lambda x: 0.0 if x < 1e-8 else x)
 
 
 @st.composite

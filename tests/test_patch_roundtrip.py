@@ -87,7 +87,7 @@ def test_kalman_designs_do_not_fit_a_gp6(name):
 
 @st.composite
 def diff_specs(draw):
-    f = lambda lo, hi: st.floats(lo, hi, allow_nan=False)
+    f = lambda lo, hi: st.floats(lo, hi, allow_nan=False).map(lambda x: 0.0 if x < 1e-8 else x)  # 0 or a weight
     data = {
         "name": "random",
         "plant": {"M": draw(f(2, 6)), "m": draw(f(0.1, 0.6)), "l": draw(f(0.3, 0.8)), "b_VF": draw(f(0.5, 5)),

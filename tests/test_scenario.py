@@ -40,10 +40,10 @@ def _write(tmp_path: Path, text: str) -> Path:
     ("duration_s = 1\nnoise = 'loud'\n", "noise"),
     ("duration_s = 1\ndrift = 'lots'\n", "drift"),
     ("duration_s = 1\n[noise]\ntheta = 'x'\n", "noise.theta"),
-    ("duration_s = 1\n[initial]\ntheta = 0.1\ntheta_deg = 5\n", "initial"),
+    ("duration_s = 1\n[initial]\ntheta = 0.1\ntheta_deg = 5\n", "initial.theta_deg"),
     ("duration_s = 1\n[[disturbances]]\nkind = 'force_impulse'\ntime_s = 1\nat = 'cart'\n"
      "duration_s = 0.1\nforce_N = 'big'\n", "disturbances[0].force_N"),
-    ("duration_s = 1\n[[disturbances]]\nkind = 'step'\ntime_s = 1\n", "disturbances[0]"),
+    ("duration_s = 2\n[[disturbances]]\nkind = 'step'\ntime_s = 1\n", "disturbances[0].size_m"),
     ("duration_s = 1\n[[disturbances]]\nkind = 'kick'\ntime_s = 1\n", "disturbances[0].kind"),
 ])
 def test_bad_field_is_one_line_with_file_and_field(tmp_path, text, field):

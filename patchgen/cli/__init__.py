@@ -63,8 +63,12 @@ class _Group(click.Group):
         try:
             return super().invoke(ctx)
         except InputError as exc:
-            click.echo(f"patchgen: {exc.line()}", err=True)
+            click.echo(f"patchgen: {_one_line(exc.line())}", err=True)
             sys.exit(exc.exit_status)
+        finally:
+            helper = sys.modules.get("patchgen.plot_helper")  # only where a command loaded it
+            if helper is not None:
+                helper.stop()
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
@@ -87,17 +91,28 @@ def cli() -> None:
     """
 
 
+def _one_line(text: str) -> str:
+    return " ".join(text.splitlines())
+
+
 def main() -> None:
-    """Run the CLI; a usage error (bad option, missing argument) is one line and exit 2."""
+    """Run the CLI; a usage error (bad option, missing argument) or bad input anywhere is one line
+    on stderr and exit 2. Anything else is a bug, and its traceback shows."""
     try:
         rv = cli.main(prog_name="patchgen", standalone_mode=False)
+    except InputError as exc:  # raised while click converts an option, outside a command
+        click.echo(f"patchgen: {_one_line(exc.line())}", err=True)
+        sys.exit(exc.exit_status)
     except click.UsageError as exc:
         cmd = exc.ctx.command_path if exc.ctx else "patchgen"
-        click.echo(f"{cmd}: {exc.format_message()} (see {cmd} --help)", err=True)
+        click.echo(f"{cmd}: {_one_line(exc.format_message())} (see {cmd} --help)", err=True)
         sys.exit(2)
     except click.ClickException as exc:
-        click.echo(f"patchgen: {exc.format_message()}", err=True)
+        click.echo(f"patchgen: {_one_line(exc.format_message())}", err=True)
         sys.exit(exc.exit_code)
+    except BrokenPipeError:  # the reader of stdout went away (patchgen ... | head): nothing to say
+        sys.stdout = open(os.devnull, "w")  # Python flushes stdout at exit: let that go nowhere
+        sys.exit(1)
     except click.Abort:
         click.echo("patchgen: aborted", err=True)
         sys.exit(1)

@@ -27,7 +27,7 @@ def example_files() -> dict[str, bytes]:
 def examples_cmd(out_dir: str, force: bool) -> None:
     """Copy the shipped designs (DIR/designs), scenarios (DIR/sims) and machine and bench
     profiles (DIR/machines, DIR/benches) into DIR, to edit and run by path."""
-    written = write_files(out_dir, example_files(), force=force)
+    written = write_files(out_dir, example_files(), force=force, option="DIR")
     for kind, sub in COPIED.items():
         click.echo(f"{sub + '/':10} {', '.join(shipped(kind))}")
     click.echo(f"wrote {len(written)} files into {out_dir}; try: patchgen patch {out_dir}/designs/"

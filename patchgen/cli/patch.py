@@ -10,7 +10,7 @@ from rich.console import Console
 from ..bench import load_bench
 from ..diagram import wiring_svg
 from ..model import plant_params
-from ..outputs import write_files
+from ..outputs import check_out_dir, write_files
 from ..patch import build_patch
 from ..pottable import pot_rows, pot_table, pots_csv
 from ..sheet import SheetSection, SheetSummary, render_sheet
@@ -55,6 +55,9 @@ def bench_section(d, machine, net, runs_hold: int, done=None) -> SheetSection:
     return SheetSection("Predicted on the bench", header, rows, note)
 
 
+PATCH_FILES = ("netlist.json", "pots.csv", "wiring.svg", "patch-sheet.html", "patch-sheet.md")
+
+
 def patch_files(d, machine, net, extra_sections=(), runs_hold: int = 20, predict_bench: bool = True,
                 done=None) -> dict[str, str]:
     """Every file of a patch, rendered in memory (nothing is written until all are ready)."""
@@ -69,7 +72,7 @@ def patch_files(d, machine, net, extra_sections=(), runs_hold: int = 20, predict
 
 
 @cli.command("patch")
-@click.argument("spec", type=click.Path(dir_okay=False))
+@click.argument("spec")
 @click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Directory for netlist.json, pots.csv, patch-sheet.html/.md and wiring.svg.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
@@ -80,6 +83,7 @@ def patch_files(d, machine, net, extra_sections=(), runs_hold: int = 20, predict
 def patch_cmd(spec: str, out_dir: str, force: bool, runs_hold: int, no_predict: bool, as_json: bool) -> None:
     """Scale SPEC's gains, allocate the machine and write the patch: netlist.json, pots.csv,
     patch-sheet.html, patch-sheet.md (with the bench prediction) and wiring.svg."""
+    check_out_dir(out_dir, PATCH_FILES, force)
     d, machine = design_from_path(spec)
     net = build_patch(d, machine)
     written = write_files(out_dir, patch_files(d, machine, net, runs_hold=runs_hold,
@@ -89,7 +93,8 @@ def patch_cmd(spec: str, out_dir: str, force: bool, runs_hold: int, no_predict: 
                                "pots": pot_rows(net), "amplifiers": [{"id": a.id, "role": a.role,
                                                                       "carries": a.carries.model_dump()}
                                                                      for a in net.amplifiers],
-                               "notes": net.notes, "written": [str(p) for p in written]}, indent=2, sort_keys=True))
+                               "notes": net.notes, "written": [str(p) for p in written]},
+                              indent=2, sort_keys=True, allow_nan=False))
         return
     console = Console()
     console.print(pot_table(net))

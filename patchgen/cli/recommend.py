@@ -11,17 +11,18 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from ..bench import load_bench
 from ..errors import InputError
-from ..machine import load_machine
-from ..outputs import write_files
+from ..outputs import check_out_dir, write_files
 from ..pottable import pot_table
 from ..recommend import Recommendation, evaluate, prepare, table_markdown, table_rows
 from ..scenario import load_scenario
 from ..sheet import SheetSection
-from ..spec import load_spec
 from . import cli
-from .patch import patch_files
+from .inputs import load_inputs, scenario_for
+from .options import SEED
+from .patch import PATCH_FILES, patch_files
+
+RECOMMEND_FILES = PATCH_FILES + ("recommendation.md", "recommendation.json")
 
 
 def why_section(rec: Recommendation, machine) -> SheetSection:
@@ -51,22 +52,21 @@ def _fmt(x, fmt, none="-"):
 
 
 @cli.command("recommend")
-@click.argument("spec", type=click.Path(dir_okay=False))
+@click.argument("spec")
 @click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Directory for the recommended patch (as patchgen patch writes it).")
 @click.option("--runs", default=200, show_default=True, type=click.IntRange(1, 100000),
               help="Monte Carlo noise seeds per realisation.")
 @click.option("--scenario", "scenario_path", default="hold-120s", show_default=True,
-              type=click.Path(dir_okay=False), help="Scenario: a shipped name or a TOML file.")
-@click.option("--seed", default=None, type=int, help="Base seed (default: the scenario's).")
+              help="Scenario: a shipped name or a TOML file.")
+@click.option("--seed", default=None, type=SEED, help="Base seed (default: the scenario's).")
 @click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
 def recommend_cmd(spec, out_dir, runs, scenario_path, seed, as_json, force):
     """Design, allocate and simulate each realisation of SPEC's estimator; write the best patch."""
-    sp = load_spec(spec)
-    machine = load_machine(sp.machine, sp.path)
-    bench = load_bench(sp.bench, sp.path)
-    scenario = load_scenario(scenario_path)
+    check_out_dir(out_dir, RECOMMEND_FILES, force)
+    sp, machine, bench = load_inputs(spec)
+    scenario = scenario_for(scenario_path, sp, runs)
     console = Console(stderr=as_json)
     cands = prepare(sp, machine)
     fit = [c for c in cands if c.netlist is not None]
@@ -99,7 +99,7 @@ def recommend_cmd(spec, out_dir, runs, scenario_path, seed, as_json, force):
     rows = table_rows(rec)
     files["recommendation.json"] = json.dumps({"spec": sp.name, "scenario": scenario.name, "runs": runs,
                                                "seed": rec.seed, "chosen": best.label, "candidates": rows},
-                                              indent=2, sort_keys=True) + "\n"
+                                              indent=2, sort_keys=True, allow_nan=False) + "\n"
     written = write_files(out_dir, files, force=force)
     if as_json:
         click.echo(files["recommendation.json"], nl=False)

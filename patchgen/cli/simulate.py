@@ -11,15 +11,17 @@ from rich.console import Console
 from rich.table import Table
 
 from .. import plot_helper
-from ..bench import load_bench
 from ..diagnosis import diagnose
 from ..model import plant_params
-from ..outputs import write_files
+from ..outputs import check_out_dir, write_files
 from ..patch import build_patch
-from ..scenario import load_scenario
 from ..simulate import SimResult, simulate, write_outputs
 from . import cli
-from .design import design_from_path
+from .design import design_of
+from .inputs import load_inputs, scenario_for
+from .options import SEED
+
+SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "history.svg", "netlist.json")
 
 
 def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal, keep_history=True,
@@ -85,12 +87,12 @@ def _p(d, key: str) -> str:
 
 
 @cli.command("simulate")
-@click.argument("spec", type=click.Path(dir_okay=False))
-@click.option("--scenario", "scenario_path", required=True, type=click.Path(dir_okay=False),
+@click.argument("spec")
+@click.option("--scenario", "scenario_path", required=True,
               help="Scenario TOML (see sims/).")
 @click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Directory for history.csv, runs.csv, summary.json and the plots.")
-@click.option("--seed", type=int, default=None, help="Noise seed (default: the scenario's).")
+@click.option("--seed", type=SEED, default=None, help="Noise seed (default: the scenario's).")
 @click.option("--runs", type=click.IntRange(1, 1_000_000), default=1, show_default=True,
               help="Monte Carlo runs over noise seeds.")
 @click.option("--ideal", is_flag=True, help="Every imperfection off (noise, drift, saturation, actuator lag "
@@ -104,16 +106,17 @@ def _p(d, key: str) -> str:
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
 def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, svg, as_json, force) -> None:
     """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
-    plot_helper.start()  # matplotlib loads on the other core while this one simulates
     spread = None
     if spread_text is not None:
         from ..sweep import parse_by, parse_vary
 
         frac = parse_by(spread_text, "--spread")
         spread = {name: frac for name in parse_vary(vary)}
-    d, machine = design_from_path(spec)
-    scenario = load_scenario(scenario_path)
-    bench = load_bench(d.spec.bench, d.spec.path)
+    check_out_dir(out_dir, SIMULATE_FILES, force)
+    plot_helper.start()  # matplotlib loads on the other core while this one simulates
+    sp, machine, bench = load_inputs(spec)
+    scenario = scenario_for(scenario_path, sp, runs, ideal)
+    d = design_of(sp, machine)
     net = build_patch(d, machine)
     result = run_with_progress(net, plant_params(d.spec), bench, machine, scenario, seed=seed, runs=runs,
                                ideal=ideal, quiet=as_json, spread=spread)
@@ -121,7 +124,7 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
     files["netlist.json"] = net.to_json().encode()
     written = write_files(out_dir, files, force=force)
     if as_json:
-        click.echo(json.dumps(result.summary(), indent=2, sort_keys=True))
+        click.echo(json.dumps(result.summary(), indent=2, sort_keys=True, allow_nan=False))
         return
     console = Console()
     console.print(summary_table(result))

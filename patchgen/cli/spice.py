@@ -13,11 +13,9 @@ from rich.console import Console
 from rich.table import Table
 
 from .. import plot_helper
-from ..bench import load_bench
 from ..model import plant_params
-from ..outputs import write_files
+from ..outputs import check_out_dir, write_files
 from ..patch import build_patch
-from ..scenario import load_scenario
 from ..simulate import simulate
 from ..spice import (
     NgspiceError,
@@ -29,7 +27,11 @@ from ..spice import (
     spice_deck,
 )
 from . import cli
-from .design import design_from_path
+from .design import design_of
+from .inputs import check_spice_points, load_inputs, scenario_for
+from .options import FiniteFloat
+
+SPICE_FILES = ("patch.cir", "patch.data", "comparison.json", "overlay.png", "overlay.svg")
 
 NO_NGSPICE_STATUS = NgspiceMissing.exit_status
 
@@ -43,16 +45,16 @@ class _Own:
 
 
 @cli.command("spice")
-@click.argument("spec", type=click.Path(dir_okay=False))
-@click.option("--scenario", "scenario_path", required=True, type=click.Path(dir_okay=False),
+@click.argument("spec")
+@click.option("--scenario", "scenario_path", required=True,
               help="Scenario TOML (see sims/).")
 @click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Directory for the deck, ngspice's data, the comparison and its overlay plot.")
 @click.option("--ideal", is_flag=True, help="Noise and drift off and the actuator a pure gain, as patchgen "
               "simulate --ideal; the op-amp macromodels (finite gain, output limits) stay.")
-@click.option("--step", "step_s", type=click.FloatRange(min=1e-5, max=0.1), default=0.005, show_default=True,
+@click.option("--step", "step_s", type=FiniteFloat(1e-5, 0.1), default=0.005, show_default=True,
               help="Output step of the transient (s).")
-@click.option("--tolerance", type=click.FloatRange(min=0), default=0.01, show_default=True,
+@click.option("--tolerance", type=FiniteFloat(0, 1), default=0.01, show_default=True,
               help="Agreement required, as a fraction of each signal's peak.")
 @click.option("--svg", is_flag=True, help="Also write the overlay plot as overlay.svg (PNG only by default).")
 @click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
@@ -61,10 +63,12 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_js
     """Export SPEC's patch and the bench as an ngspice deck, run it, and compare with patchgen's own
     simulation of the same scenario. Exit 0 when they agree within --tolerance, 1 when not,
     3 without ngspice (the deck is still written)."""
+    check_out_dir(out_dir, SPICE_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while ngspice runs
-    d, machine = design_from_path(spec)
-    scenario = load_scenario(scenario_path)
-    bench = load_bench(d.spec.bench, d.spec.path)
+    sp, machine, bench = load_inputs(spec)
+    scenario = scenario_for(scenario_path, sp, 1, ideal)
+    check_spice_points(scenario, step_s)
+    d = design_of(sp, machine)
     net = build_patch(d, machine)
     plant = plant_params(d.spec)
     noise_on = (not ideal) and scenario.noise.mode != "off"
@@ -102,10 +106,10 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_js
               "signals": {k: {"rms_rel": v.rms_rel, "max_rel": v.max_rel, "peak": v.peak}
                           for k, v in cmp.signals.items()},
               "agrees": cmp.agrees(tolerance)}
-    files["comparison.json"] = json.dumps(report, indent=2, sort_keys=True) + "\n"
+    files["comparison.json"] = json.dumps(report, indent=2, sort_keys=True, allow_nan=False) + "\n"
     written = write_files(out_dir, files, force=force)
     if as_json:
-        click.echo(json.dumps(report, indent=2, sort_keys=True))
+        click.echo(json.dumps(report, indent=2, sort_keys=True, allow_nan=False))
     else:
         t = Table(title=f"ngspice against patchgen: {d.spec.name}, {scenario.name}"
                   + (" (ideal: noise, drift off; ideal actuator; op-amp macromodels)" if ideal else ""),

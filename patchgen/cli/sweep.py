@@ -8,10 +8,10 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from ..scenario import load_scenario
 from ..sweep import parse_by, parse_vary, sweep
 from . import cli
-from .design import design_from_path
+from .design import design_of
+from .inputs import load_inputs, scenario_for
 
 
 def _db(x):
@@ -19,12 +19,11 @@ def _db(x):
 
 
 @cli.command("sweep")
-@click.argument("spec", type=click.Path(dir_okay=False))
+@click.argument("spec")
 @click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters to vary, comma-separated.")
 @click.option("--by", "by_text", default="10%", show_default=True, help="Relative change, e.g. 10%.")
 @click.option("--workers", default=0, type=click.IntRange(0, 64), help="Processes (0: one per core).")
 @click.option("--scenario", "scenario_path", default="offset-10deg", show_default=True,
-              type=click.Path(dir_okay=False),
               help="Scenario (shipped name or TOML file) for the nominal patch's predicted outcome.")
 @click.option("--runs", type=click.IntRange(1, 10000), default=1, show_default=True,
               help="Noise seeds per row for the predicted outcome.")
@@ -33,8 +32,9 @@ def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: s
     """Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2): the gains, the
     margins, the pots that would change, and how the nominal patch (as wired) does on that plant."""
     names, by = parse_vary(vary), parse_by(by_text)
-    d, machine = design_from_path(spec)
-    load_scenario(scenario_path)  # a bad scenario fails here, in one line
+    sp, machine, _ = load_inputs(spec)
+    scenario_for(scenario_path, sp, runs)  # a bad scenario fails here, in one line
+    d = design_of(sp, machine)
     rows = sweep(d.spec, machine, names, by, workers, scenario_path, runs)
     states = list(d.states)
     if as_json:
@@ -46,7 +46,7 @@ def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: s
                 "lower_gm_db": r.lqg_margins.lower_gm_db, "upper_gm_db": r.lqg_margins.upper_gm_db,
                 "pm_deg": r.lqg_margins.pm_deg, "stable": r.lqg_margins.stable},
             "pot_changes": r.pot_changes, "patch_error": r.patch_error, "outcome": r.outcome} for r in rows],
-            indent=2, sort_keys=True))
+            indent=2, sort_keys=True, allow_nan=False))
         return
     t = Table(title=f"{d.spec.name}: LQR gain K (u = -K x) with parameters off by {by:.0%}", title_justify="left")
     t.add_column("case")

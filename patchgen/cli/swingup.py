@@ -15,7 +15,7 @@ from .. import plot_helper
 from ..bench import load_bench
 from ..manoeuvre import manoeuvre, plot_manoeuvre
 from ..model import plant_params
-from ..outputs import write_files
+from ..outputs import check_out_dir, write_files
 from ..patch import build_patch
 from ..sheet import SheetSection
 from ..swingup import STRATEGIES
@@ -23,21 +23,25 @@ from ..swingup_output import compact_schedule_rows, patch_sheet_rows, write_outp
 from ..swingup_run import compare_strategies
 from . import cli
 from .design import design_from_path
-from .patch import patch_files
+from .options import SEED, FiniteFloat
+from .patch import PATCH_FILES, patch_files
+
+SWINGUP_FILES = PATCH_FILES + ("swingup-history.csv", "swingup-switching.csv", "swingup-switching.md", "swingup.png",
+                               "swingup.svg", "manoeuvre.png", "manoeuvre.svg", "manoeuvre.json")
 
 
 @cli.command("swingup")
-@click.argument("spec", type=click.Path(dir_okay=False))
+@click.argument("spec")
 @click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Directory for the manoeuvre's histories, switching table, plots and the patch with the schedule.")
 @click.option("--strategy", type=click.Choice(STRATEGIES), default="supervisory", show_default=True,
               help="supervisory: section 3.3's three-phase logic on measured states; schedule: optimised "
               "open-loop switching times; energy: Astrom-Furuta energy control.")
-@click.option("--force-limit", type=click.FloatRange(min=0.1), default=None,
+@click.option("--force-limit", type=FiniteFloat(0.1, 1000), default=None,
               help="Largest force (N) for the pump-up (default: the bench actuator's limit).")
-@click.option("--hold", "hold_s", type=click.FloatRange(min=0.1), default=30.0, show_default=True,
-              help="Seconds the patched controller must hold after the hand-off.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Noise seed of the hold.")
+@click.option("--hold", "hold_s", type=FiniteFloat(0.1, 3600), default=30.0, show_default=True,
+              help="Seconds the patched controller must hold after the hand-off (at most an hour).")
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Noise seed of the hold.")
 @click.option("--compare", is_flag=True, help="Also compare the three strategies (time to the zone, cart "
               "excursion, success on plants off by +/-10%); takes about a minute.")
 @click.option("--svg", is_flag=True, help="Also write the plots as SVG (PNG only by default).")
@@ -47,6 +51,7 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg
     """Pump SPEC's pendulum up from hanging at rest, hand it to the patched controller when the state
     enters the zone of the linear design, and hold it on the bench (actuator lag and dead zone,
     noise, drift)."""
+    check_out_dir(out_dir, SWINGUP_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one computes
     d, machine = design_from_path(spec)
     net = build_patch(d, machine)
@@ -82,7 +87,7 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg
             comparison = compare_strategies(plant, F, d.K[:, :4], m.zone)
         summary["comparison"] = [{k: v.item() if hasattr(v, "item") else v for k, v in asdict(r).items()}
                                  for r in comparison]
-    files["manoeuvre.json"] = json.dumps(summary, indent=2, sort_keys=True) + "\n"
+    files["manoeuvre.json"] = json.dumps(summary, indent=2, sort_keys=True, allow_nan=False) + "\n"
     written = write_files(out_dir, files, force=force)
     if as_json:
         click.echo(files["manoeuvre.json"], nl=False)

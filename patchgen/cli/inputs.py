@@ -1,0 +1,42 @@
+"""A command's inputs, read and checked before anything is computed: the spec and the profiles
+it names, the scenario (inside the spec's track, within the simulation bounds), and the output
+folder's pre-flight (patchgen.outputs.check_out_dir)."""
+
+from __future__ import annotations
+
+from .. import budget
+from ..bench import BenchProfile, load_bench
+from ..errors import InputError
+from ..machine import MachineProfile, load_machine
+from ..scenario import Scenario, check_on_track, load_scenario
+from ..spec import DesignSpec, load_spec
+
+MAX_SPICE_POINTS = 10**6  # transient points of an ngspice run (duration / --step)
+
+
+def load_inputs(path: str) -> tuple[DesignSpec, MachineProfile, BenchProfile]:
+    """The spec and the machine and bench profiles it names, each fully checked."""
+    spec = load_spec(path)
+    return spec, load_machine(spec.machine, spec.path), load_bench(spec.bench, spec.path)
+
+
+def scenario_for(path: str, spec: DesignSpec, runs: int = 1, ideal: bool = False) -> Scenario:
+    """The scenario, checked against the spec's track and, before any design, against the
+    simulation bounds at the coarsest step the engine would take (the exact check follows in
+    patchgen.simulate, once the circuit's time constants are known)."""
+    from ..engine import default_step
+
+    sc = load_scenario(path)
+    check_on_track(sc, spec.plant.d, spec.path)
+    step = sc.dt_s or default_step([], ideal)
+    budget.check(sc, runs, step=step, stride=max(1, round(sc.record_dt_s / step)), history=True,
+                 usual_step=default_step([], ideal))
+    return sc
+
+
+def check_spice_points(sc: Scenario, step_s: float) -> None:
+    """An ngspice transient of at most MAX_SPICE_POINTS output points."""
+    points = sc.duration_s / step_s
+    if points > MAX_SPICE_POINTS:
+        raise InputError("--step", "", f"{sc.duration_s:g} s of {sc.path} at {step_s:g} s is {points:.3g} points; "
+                                       f"at most {MAX_SPICE_POINTS:.0e} (a larger --step)")

@@ -1,4 +1,4 @@
-"""Speed and accuracy of patchgen's bench simulator (issue 4). A script, not a timed test.
+"""Speed and accuracy of patchgen's bench simulator. A script, not a timed test.
 
 1. One 60 s run of the section 5.3 patch (tests/fixtures/thesis-ch5.netlist.json) in ideal mode,
    released from 10 deg, through patchgen.simulate and through python-control's

@@ -54,7 +54,7 @@ def test_noise_process_keeps_the_low_frequency_density(dt):
 @pytest.mark.parametrize("name", ["offset-10deg", "finger-push", "step-cart"])
 @pytest.mark.parametrize("ideal", [True, False])
 def test_halving_the_default_step_moves_theta_less_than_1e_4_rad_rms(name, ideal):
-    """Issue 4's accuracy rule, measured with noise off (a noise realisation depends on the
+    """The step's accuracy rule, measured with noise off (a noise realisation depends on the
     step); the bench runs include dead zone, lag, clipping and the limit switches."""
     net = read_netlist(ROOT / "tests/fixtures/thesis-ch5.netlist.json")
     bench, gp6 = load_bench("uw-1991"), load_machine("gp6")

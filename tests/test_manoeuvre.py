@@ -16,7 +16,7 @@ from .conftest import ROOT, design_path
 
 
 def test_bench_recommended_from_hanging_to_held():
-    # issue acceptance: 15 N, zone in under 7 s, cart inside +/-0.545 m, then 30 s held on the bench
+    # acceptance: 15 N, zone in under 7 s, cart inside +/-0.545 m, then 30 s held on the bench
     d, m = design_from_path(design_path("bench-recommended"))
     net = build_patch(d, m)
     bench = load_bench("uw-1991")

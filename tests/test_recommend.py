@@ -1,4 +1,4 @@
-"""patchgen recommend: the bench figures of issue 6, the patch's readback, the ranking, the new
+"""patchgen recommend: the bench figures of the recommended patch, the patch's readback, the ranking, the new
 estimator kinds. Bench figures are simulated on sims/hold-120s.toml with the uw-1991 bench
 (lag 0.2 s, +/-0.2 V dead zone, 15 N limit, sensor noise) and the GP-6's drift, 200 seeds."""
 
@@ -26,7 +26,7 @@ from .conftest import ROOT, design_path
 from .test_patch_roundtrip import check_roundtrip
 
 HOLD = ROOT / "patchgen" / "sims" / "hold-120s.toml"
-RUNS = 200  # the issue's figure: 200 noise seeds
+RUNS = 200  # 200 noise seeds, as recommend's default
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +42,7 @@ def test_recommended_patch_holds_in_95_percent_of_200_seeds(recommended):
     out, rec = recommended
     best = next(c for c in rec["candidates"] if c["realisation"] == rec["chosen"])
     assert rec["runs"] == RUNS and best["rank"] == 1
-    assert best["fraction_ok"] >= 0.95  # issue 6, Done when (measured: 1.0)
+    assert best["fraction_ok"] >= 0.95  # the recommended patch holds (measured: 1.0)
     assert best["fraction_overloaded"] == 0.0
     assert best["worst_swing_V"] < 10.0  # every amplifier inside +/-10 V
     net = read_netlist(out / "netlist.json")
@@ -57,7 +57,7 @@ def test_thesis_ch5_patch_fails_in_most_seeds():
     net = build_patch(d, m)
     r = simulate(net, plant_params(d.spec), load_bench(d.spec.bench), m, load_scenario(HOLD), runs=RUNS,
                  keep_history=False)
-    assert r.distribution.fraction_held < 0.5  # issue 6: fails in most seeds (measured: 0.0)
+    assert r.distribution.fraction_held < 0.5  # fails in most seeds (measured: 0.0)
 
 
 def test_recommended_netlist_reads_back_to_the_design(recommended):

@@ -1,4 +1,4 @@
-"""Fidelity of the bench simulator (issue 4): ideal mode against the linear closed loop, seeds,
+"""Fidelity of the bench simulator: ideal mode against the linear closed loop, seeds,
 the section 5.3 patch on the bench, a sign error, and the output files."""
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ from patchgen.swingup_run import swing_up
 
 # Table B.1 of the thesis.
 TABLE_B1 = PlantParams(M=3.552, m=0.324, l=0.429, g=9.807, b_VF=2.5775, c=0.001, d=1.090)
-# Chapter 3 assumes 15 N of control (section 3.3); the issue asks for the zone within 7 s.
+# Chapter 3 assumes 15 N of control (section 3.3); the pump-up must reach the zone within 7 s.
 FORCE = 15.0
 # python-control lqr on eq. 2.28 with Q = diag(25, 100, 25, 100), R = 0.1.
 K_LQR = np.array([-15.8114, -209.0301, -31.0045, -52.9470])

@@ -1,8 +1,8 @@
 """Speed and accuracy of patchgen's bench simulator. A script, not a timed test.
 
 1. One 60 s run of the section 5.3 patch (tests/fixtures/thesis-ch5.netlist.json) in ideal mode,
-   released from 10 deg, through patchgen.simulate and through python-control's
-   input_output_response on the same closed loop: the nonlinear plant (patchgen.plant) and the
+   released from 10 deg, through patchgen.bench.simulate and through python-control's
+   input_output_response on the same closed loop: the nonlinear plant (patchgen.plant.equations) and the
    same circuit, evaluated in Python from the same compiled netlist arrays. A python-control run
    at rtol 1e-12 (DOP853) is the reference; python-control is timed at each tolerance, and the
    speed ratio is taken at the loosest tolerance whose theta error is no larger than patchgen's
@@ -13,7 +13,7 @@
    the limit switches within seconds, which would flatter the figure; that case is timed too).
    Peak memory is resource.getrusage's maximum resident set of this process.
 3. Monte-Carlo throughput: 1000 runs of hold-120s on bench-recommended (120 s at 2 ms, noise and
-   drift as the profiles say), in process through patchgen.simulate with numba's cache warm
+   drift as the profiles say), in process through patchgen.bench.simulate with numba's cache warm
    (median of --repeats): ns of CPU per run-step (all threads' CPU time over the run-steps done)
    and runs per second of wall time; then the whole command `patchgen simulate bench-recommended
    --scenario hold-120s --runs 1000 -o DIR` in a fresh process (median of --process-repeats),
@@ -42,13 +42,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from patchgen.bench import load_bench
-from patchgen.circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER, compile_circuit
-from patchgen.machine import load_machine
-from patchgen.netlist import read_netlist
-from patchgen.plant import PlantParams, nonlinear_rhs
-from patchgen.scenario import Scenario, load_scenario
-from patchgen.simulate import simulate
+from patchgen.bench.circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER, compile_circuit
+from patchgen.bench.simulate import simulate
+from patchgen.inputs.scenario import Scenario, load_scenario
+from patchgen.patch.netlist import read_netlist
+from patchgen.plant.equations import PlantParams, nonlinear_rhs
+from patchgen.profiles.bench import load_bench
+from patchgen.profiles.machine import load_machine
 
 NETLIST = ROOT / "tests/fixtures/thesis-ch5.netlist.json"
 # thesis table B.1 (the design spec, designs/thesis-ch5.toml, will carry these)
@@ -233,8 +233,8 @@ def throughput(repeats: int, process_repeats: int) -> None:
     import numba
 
     from patchgen.cli.design import design_from_path
-    from patchgen.model import plant_params
-    from patchgen.patch import build_patch
+    from patchgen.design.model import plant_params
+    from patchgen.patch.build import build_patch
 
     d, machine = design_from_path("bench-recommended")
     net, plant = build_patch(d, machine), plant_params(d.spec)

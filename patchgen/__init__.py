@@ -10,13 +10,13 @@ The Python API (docs/api.md) is loaded on first use, so ``import patchgen`` stay
 __version__ = "0.2.0"
 
 _LAZY = {
-    "load_design": "patchgen.lti",
-    "plant_ss": "patchgen.lti",
-    "compensator_ss": "patchgen.lti",
-    "loop_ss": "patchgen.lti",
-    "closed_loop_ss": "patchgen.lti",
-    "load_spec": "patchgen.spec",
-    "design": "patchgen.design",
+    "load_design": "patchgen.design.lti",
+    "plant_ss": "patchgen.design.lti",
+    "compensator_ss": "patchgen.design.lti",
+    "loop_ss": "patchgen.design.lti",
+    "closed_loop_ss": "patchgen.design.lti",
+    "load_spec": "patchgen.inputs.spec",
+    "design": "patchgen.design.lqg",
 }
 
 __all__ = ["__version__", *_LAZY]

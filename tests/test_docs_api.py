@@ -9,7 +9,7 @@ import warnings
 import matplotlib
 import pytest
 
-from .conftest import ROOT
+from tests.conftest import ROOT
 
 BLOCK = re.compile(r"^```python\n(.*?)^```", re.S | re.M)
 

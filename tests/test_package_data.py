@@ -8,12 +8,11 @@ import tomllib
 
 import pytest
 
-from patchgen.errors import InputError
-from patchgen.resources import resolve, shipped
-from patchgen.scenario import load_scenario
-from patchgen.spec import load_spec
-
-from .conftest import ROOT
+from patchgen.inputs.errors import InputError
+from patchgen.inputs.resources import resolve, shipped
+from patchgen.inputs.scenario import load_scenario
+from patchgen.inputs.spec import load_spec
+from tests.conftest import ROOT
 
 
 def test_every_shipped_file_is_package_data():
@@ -22,7 +21,7 @@ def test_every_shipped_file_is_package_data():
     assert "bench-recommended" in kinds["design"] and "hold-120s" in kinds["scenario"]
     assert kinds["machine"] == ["gp6", "the-analog-thing"] and kinds["bench"] == ["uw-1991"]
     data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["patchgen"]
-    for folder in ("designs", "sims", "machines", "benches"):
+    for folder in ("designs", "sims", "profiles/machines", "profiles/benches"):
         assert f"{folder}/*.toml" in data
     assert "templates/*.j2" in data
 

@@ -8,8 +8,9 @@ import sys
 
 import click
 
+from patchgen.inputs.errors import InputError
+
 from .. import __version__
-from ..errors import InputError
 
 # patchgen's matrices are a few states wide: OpenBLAS's worker threads only add start-up and
 # spin-waits (twice the time of a design on a busy machine) and take cores from the simulator's
@@ -66,7 +67,7 @@ class _Group(click.Group):
             click.echo(f"patchgen: {_one_line(exc.line())}", err=True)
             sys.exit(exc.exit_status)
         finally:
-            helper = sys.modules.get("patchgen.plot_helper")  # only where a command loaded it
+            helper = sys.modules.get("patchgen.render.plot_helper")  # only where a command loaded it
             if helper is not None:
                 helper.stop()
 

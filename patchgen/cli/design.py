@@ -7,8 +7,9 @@ import json
 import click
 from rich.console import Console
 
-from ..design import design
-from ..report import design_dict, print_design
+from patchgen.design.lqg import design
+from patchgen.design.report import design_dict, print_design
+
 from . import cli
 from .inputs import load_inputs
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import click
 
-from ..outputs import write_files
-from ..resources import folder, shipped
+from patchgen.inputs.resources import folder, shipped
+from patchgen.render.outputs import write_files
+
 from . import cli
 
 # what is copied, and the sub-folder it goes to

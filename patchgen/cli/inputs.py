@@ -1,15 +1,15 @@
 """A command's inputs, read and checked before anything is computed: the spec and the profiles
 it names, the scenario (inside the spec's track, within the simulation bounds), and the output
-folder's pre-flight (patchgen.outputs.check_out_dir)."""
+folder's pre-flight (patchgen.render.outputs.check_out_dir)."""
 
 from __future__ import annotations
 
-from .. import budget
-from ..bench import BenchProfile, load_bench
-from ..errors import InputError
-from ..machine import MachineProfile, load_machine
-from ..scenario import Scenario, check_on_track, load_scenario
-from ..spec import DesignSpec, load_spec
+from patchgen.bench import budget
+from patchgen.inputs.errors import InputError
+from patchgen.inputs.scenario import Scenario, check_on_track, load_scenario
+from patchgen.inputs.spec import DesignSpec, load_spec
+from patchgen.profiles.bench import BenchProfile, load_bench
+from patchgen.profiles.machine import MachineProfile, load_machine
 
 MAX_SPICE_POINTS = 10**6  # transient points of an ngspice run (duration / --step)
 
@@ -23,8 +23,8 @@ def load_inputs(path: str) -> tuple[DesignSpec, MachineProfile, BenchProfile]:
 def scenario_for(path: str, spec: DesignSpec, runs: int = 1, ideal: bool = False) -> Scenario:
     """The scenario, checked against the spec's track and, before any design, against the
     simulation bounds at the coarsest step the engine would take (the exact check follows in
-    patchgen.simulate, once the circuit's time constants are known)."""
-    from ..engine import default_step
+    patchgen.bench.simulate, once the circuit's time constants are known)."""
+    from patchgen.bench.engine import default_step
 
     sc = load_scenario(path)
     check_on_track(sc, spec.plant.d, spec.path)

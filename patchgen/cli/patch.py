@@ -7,13 +7,14 @@ import json
 import click
 from rich.console import Console
 
-from ..bench import load_bench
-from ..diagram import wiring_svg
-from ..model import plant_params
-from ..outputs import check_out_dir, write_files
-from ..patch import build_patch
-from ..pottable import pot_rows, pot_table, pots_csv
-from ..sheet import SheetSection, SheetSummary, render_sheet
+from patchgen.design.model import plant_params
+from patchgen.patch.build import build_patch
+from patchgen.profiles.bench import load_bench
+from patchgen.render.diagram import wiring_svg
+from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.render.pottable import pot_rows, pot_table, pots_csv
+from patchgen.render.sheet import SheetSection, SheetSummary, render_sheet
+
 from . import cli
 from .design import design_from_path
 
@@ -42,7 +43,11 @@ def _margin_cells(m) -> dict[str, str]:
 
 def bench_section(d, machine, net, runs_hold: int, done=None) -> SheetSection:
     """'Predicted on the bench' from the standard scenarios (``done``: see prediction.predict)."""
-    from ..prediction import diagnosis_note, predict, prediction_rows  # the simulator: numba, only here
+    from patchgen.bench.prediction import (  # the simulator: numba, only here
+        diagnosis_note,
+        predict,
+        prediction_rows,
+    )
 
     bench = load_bench(d.spec.bench, d.spec.path)
     plant = plant_params(d.spec)

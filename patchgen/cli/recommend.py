@@ -11,12 +11,13 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from ..errors import InputError
-from ..outputs import check_out_dir, write_files
-from ..pottable import pot_table
-from ..recommend import Recommendation, evaluate, prepare, table_markdown, table_rows
-from ..scenario import load_scenario
-from ..sheet import SheetSection
+from patchgen.inputs.errors import InputError
+from patchgen.inputs.scenario import load_scenario
+from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.render.pottable import pot_table
+from patchgen.render.sheet import SheetSection
+from patchgen.studies.recommend import Recommendation, evaluate, prepare, table_markdown, table_rows
+
 from . import cli
 from .inputs import load_inputs, scenario_for
 from .options import SEED

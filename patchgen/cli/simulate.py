@@ -10,12 +10,13 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from .. import plot_helper
-from ..diagnosis import diagnose
-from ..model import plant_params
-from ..outputs import check_out_dir, write_files
-from ..patch import build_patch
-from ..simulate import SimResult, simulate, write_outputs
+from patchgen.bench.diagnosis import diagnose
+from patchgen.bench.simulate import SimResult, simulate, write_outputs
+from patchgen.design.model import plant_params
+from patchgen.patch.build import build_patch
+from patchgen.render import plot_helper
+from patchgen.render.outputs import check_out_dir, write_files
+
 from . import cli
 from .design import design_of
 from .inputs import load_inputs, scenario_for
@@ -108,7 +109,7 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
     """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
     spread = None
     if spread_text is not None:
-        from ..sweep import parse_by, parse_vary
+        from patchgen.studies.sweep import parse_by, parse_vary
 
         frac = parse_by(spread_text, "--spread")
         spread = {name: frac for name in parse_vary(vary)}

@@ -12,12 +12,12 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from .. import plot_helper
-from ..model import plant_params
-from ..outputs import check_out_dir, write_files
-from ..patch import build_patch
-from ..simulate import simulate
-from ..spice import (
+from patchgen.bench.simulate import simulate
+from patchgen.design.model import plant_params
+from patchgen.patch.build import build_patch
+from patchgen.render import plot_helper
+from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.spice.deck import (
     NgspiceError,
     NgspiceMissing,
     SpiceSettings,
@@ -26,6 +26,7 @@ from ..spice import (
     run_ngspice,
     spice_deck,
 )
+
 from . import cli
 from .design import design_of
 from .inputs import check_spice_points, load_inputs, scenario_for

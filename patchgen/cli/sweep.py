@@ -8,7 +8,8 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from ..sweep import parse_by, parse_vary, sweep
+from patchgen.studies.sweep import parse_by, parse_vary, sweep
+
 from . import cli
 from .design import design_of
 from .inputs import load_inputs, scenario_for

@@ -11,16 +11,17 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from .. import plot_helper
-from ..bench import load_bench
-from ..manoeuvre import manoeuvre, plot_manoeuvre
-from ..model import plant_params
-from ..outputs import check_out_dir, write_files
-from ..patch import build_patch
-from ..sheet import SheetSection
-from ..swingup import STRATEGIES
-from ..swingup_output import compact_schedule_rows, patch_sheet_rows, write_outputs
-from ..swingup_run import compare_strategies
+from patchgen.design.model import plant_params
+from patchgen.patch.build import build_patch
+from patchgen.profiles.bench import load_bench
+from patchgen.render import plot_helper
+from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.render.sheet import SheetSection
+from patchgen.swingup.manoeuvre import manoeuvre, plot_manoeuvre
+from patchgen.swingup.output import compact_schedule_rows, patch_sheet_rows, write_outputs
+from patchgen.swingup.run import compare_strategies
+from patchgen.swingup.strategies import STRATEGIES
+
 from . import cli
 from .design import design_from_path
 from .options import SEED, FiniteFloat

@@ -1,0 +1,182 @@
+"""The plant and the patched circuit evaluated for every lane of a block (patchgen.bench.kernel): arrays
+(quantity, lane), loops over lanes innermost so that LLVM vectorises them across runs.
+
+Indexing, not views: numba reference-counts a view, and a view per row and stage would cost more
+than the row's arithmetic. Branches that differ between lanes are selects, and sine and cosine are
+computed by arithmetic (libm's are scalar calls, which stop a loop from vectorising).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from patchgen.bench.circuit import INTEGRATOR, LAG, SUMMER
+from patchgen.plant.equations import PLANT_STATES
+
+ACT_GAIN, ACT_LAG, ACT_LAG_ZERO = 0, 1, 2
+S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
+_JIT = {"cache": True, "error_model": "numpy"}  # as patchgen.bench.kernel's
+
+_TWO_OVER_PI = 2.0 / math.pi
+_PIO2_A = math.ldexp(math.floor(math.ldexp(math.pi / 2, 30)), -30)  # 31 bits: k * _PIO2_A exact
+_PIO2_B = math.pi / 2 - _PIO2_A  # the rest of the double nearest pi/2 (an exact difference)
+_PIO2_C = 6.123233995736766e-17  # pi/2 minus that double
+# Taylor coefficients, highest order first: sin r = r + r z (S1 + z S2 + ...), cos r = 1 + z (C1 + ...)
+_SIN = tuple((-1) ** k / math.factorial(2 * k + 1) for k in range(8, 0, -1))
+_COS = tuple((-1) ** k / math.factorial(2 * k) for k in range(9, 0, -1))
+
+
+@nb.njit(inline="always", **_JIT)
+def sincos(x):
+    """(sin x, cos x) by arithmetic alone, so that a loop over lanes vectorises (libm's are
+    scalar calls): reduction by pi/2 in three parts, then Taylor series on |r| <= pi/4, where the
+    first omitted terms are below 1e-19. Within a few ulp of libm for |x| < 1e5."""
+    k = math.floor(x * _TWO_OVER_PI + 0.5)
+    r = ((x - k * _PIO2_A) - k * _PIO2_B) - k * _PIO2_C
+    z = r * r
+    ps = 0.0
+    for a in _SIN:
+        ps = ps * z + a
+    pc = 0.0
+    for a in _COS:
+        pc = pc * z + a
+    s = r + r * z * ps
+    c = 1.0 + z * pc
+    q = np.int64(k)  # the quadrant, by selects (a return per quadrant stops vectorisation)
+    swap = (q & 1) != 0
+    sn = c if swap else s
+    cs = s if swap else c
+    return (-sn if q & 2 else sn), (-cs if (q + 1) & 2 else cs)
+
+
+N_COEF = 10
+
+
+@nb.njit(inline="always", **_JIT)
+def plant_coefficients(p, out):
+    """The per-run constants of eq. 2.16-2.19 from p = (M, m, l, g, b_VF, c, ...), into out."""
+    M, m, l, g, b, c = p[0], p[1], p[2], p[3], p[4], p[5]
+    out[0], out[1], out[2], out[3], out[4] = M + m, m, m * l, c / l, m * g
+    out[5], out[6], out[7], out[8], out[9] = b, -c / (m * l * l), g / l, 1.0 / (m * l), 1.0 / l
+
+
+@nb.njit(inline="always", **_JIT)
+def plant_accel(q, i, sn, cs, sd, thd, force, tip):
+    """(s_ddot, theta_ddot) of eq. 2.16-2.19 with coefficients q[:, i], plus a horizontal force at
+    the pendulum tip (distance l): generalised forces tip on s and tip * l * cos(theta) on theta."""
+    den = q[0, i] - q[1, i] * cs * cs
+    bracket = -q[5, i] * sd + q[2, i] * thd * thd * sn + q[3, i] * thd * cs - q[4, i] * sn * cs + force
+    sdd = (bracket + tip * sn * sn) / den
+    return sdd, q[6, i] * thd + q[7, i] * sn + tip * cs * q[8, i] - cs * sdd * q[9, i]
+
+
+@nb.njit(**_JIT)
+def plant_rhs(p, th, sd, thd, force, tip_force):
+    """(ds, dtheta, ds_dot, dtheta_dot) as the kernel computes them (p = M, m, l, g, b_VF, c)."""
+    q = np.empty((N_COEF, 1))
+    plant_coefficients(p, q[:, 0])
+    sn, cs = sincos(th)
+    sdd, thdd = plant_accel(q, 0, sn, cs, sd, thd, force, tip_force)
+    return sd, thd, sdd, thdd
+
+
+@nb.njit(inline="always", **_JIT)
+def _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc):
+    """acc[0, lane] = 0 + amplifier j's inputs times their gains but the last. Returns the row
+    of acc holding that sum (row 1 is zeros: at most one input) and the last input's signal and
+    gain, for the caller to add in its own loop over lanes (a pass fewer). Without inputs: the
+    zero row at the end of sig, gain 0."""
+    lo, hi = in_ptr[j], in_ptr[j + 1] - 1
+    if hi < lo:
+        return 1, sig.shape[0] - 1, 0.0
+    for k in range(lo, hi):
+        g, src = in_gain[k], in_src[k]
+        if k == lo:
+            for l in range(acc.shape[1]):
+                acc[0, l] = 0.0 + g * sig[src, l]
+        else:
+            for l in range(acc.shape[1]):
+                acc[0, l] += g * sig[src, l]
+    return (0 if hi > lo else 1), in_src[hi], in_gain[hi]
+
+
+@nb.njit(**_JIT)
+def circuit(X, Z, s_ref, nz, sensor_state, sensor_gain, amp_kind, in_ptr, in_src, in_gain,
+            param1, param2, drift, sat, clip, sig, raw, dz, st, acc):
+    """Sensors and amplifiers in evaluation order: sig (clipped if clip; its last row stays 0),
+    raw (before clipping), and the amplifier state derivatives into dz[st] (a summer's stay 0)."""
+    ns = sensor_state.shape[0]
+    nl = acc.shape[1]
+    hi = sat if clip else np.inf
+    for i in range(ns):
+        q, g = sensor_state[i], sensor_gain[i]
+        ref = s_ref if q == S_INDEX else 0.0
+        for l in range(nl):
+            sig[i, l] = g * (X[q, l] - ref) + nz[i, l]
+    # outputs in evaluation order (integrators and lags, whose outputs are their states, first)
+    for j in range(amp_kind.shape[0]):
+        kd, a = amp_kind[j], ns + j
+        if kd == INTEGRATOR or kd == LAG:
+            for l in range(nl):
+                v = Z[j, l] + nz[a, l]
+                raw[j, l] = v
+                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+            continue
+        b, src, g = _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc)
+        if kd == SUMMER:
+            for l in range(nl):
+                v = -(acc[b, l] + g * sig[src, l]) + nz[a, l]
+                raw[j, l] = v
+                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+        else:  # DIFFERENTIATOR with roll-off
+            p1, p2 = param1[j], param2[j]
+            for l in range(nl):
+                e = acc[b, l] + g * sig[src, l] - Z[j, l]
+                v = -p1 * e + nz[a, l]
+                raw[j, l] = v
+                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+                dz[st, j, l] = p2 * e
+    # last, the integrating amplifiers' inputs, now that every signal of this instant is known
+    for j in range(amp_kind.shape[0]):
+        kd = amp_kind[j]
+        if kd == INTEGRATOR or kd == LAG:
+            b, src, g = _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc)
+            p1 = param1[j]
+            if kd == INTEGRATOR:
+                for l in range(nl):
+                    dz[st, j, l] = -p1 * (acc[b, l] + g * sig[src, l]) + drift[j, l]
+            else:
+                for l in range(nl):
+                    dz[st, j, l] = p1 * (-(acc[b, l] + g * sig[src, l]) - Z[j, l]) + drift[j, l]
+
+
+@nb.njit(**_JIT)
+def drive(X, XA, sig, out_index, tripped, pc, actuator, f_cart, f_tip, kp, kx, forces, st):
+    """Actuator (dead zone, model, force limit; off once tripped) and plant slopes per lane,
+    into kp[st], kx[st], forces[st]. actuator = (model ACT_*, K_U, tau, dead zone, force limit);
+    X (plant state), XA (actuator state) and pc (plant_coefficients) are per lane."""
+    act, K_U, tau, dz, flim = actuator
+    inv_tau = 1.0 / tau
+    ku_tau = K_U / tau
+    for l in range(XA.shape[0]):
+        u = sig[out_index, l]
+        v = u - dz if u > dz else (u + dz if u < -dz else 0.0)
+        xa = XA[l]
+        if act == ACT_GAIN:
+            force, dx = K_U * v, 0.0
+        elif act == ACT_LAG:
+            force, dx = xa, (K_U * v - xa) * inv_tau
+        else:
+            force, dx = ku_tau * (v - xa), (v - xa) * inv_tau
+        force = flim if force > flim else (-flim if force < -flim else force)
+        if tripped[l]:
+            force = 0.0
+        sd, thd = X[2, l], X[3, l]
+        sn, cs = sincos(X[1, l])
+        sdd, thdd = plant_accel(pc, l, sn, cs, sd, thd, force + f_cart, f_tip)
+        kp[st, 0, l], kp[st, 1, l], kp[st, 2, l], kp[st, 3, l] = sd, thd, sdd, thdd
+        kx[st, l] = dx
+        forces[st, l] = force

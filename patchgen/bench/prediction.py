@@ -1,0 +1,67 @@
+"""'Predicted on the bench': the patch simulated in the standard scenarios, for the patch sheet."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from patchgen.bench.diagnosis import diagnose
+from patchgen.bench.simulate import RunSummary, simulate
+from patchgen.inputs.scenario import load_scenario
+from patchgen.patch.netlist import Netlist
+from patchgen.plant.equations import PlantParams
+from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
+
+STANDARD = ("offset-10deg", "finger-push", "step-cart", "hold-120s")
+
+
+@dataclass(frozen=True)
+class Prediction:
+    scenario: str
+    description: str
+    runs: int
+    fraction_held: float
+    first_trip_s: float | None
+    first_fall_s: float | None
+    max_theta_deg: float
+    max_s_m: float
+    overloads: str
+
+
+def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
+            runs_hold: int = 20, scenarios: tuple[str, ...] = STANDARD,
+            done: dict[str, list[RunSummary]] | None = None) -> list[Prediction]:
+    """Each standard scenario on the bench (noise and drift as the profiles say); the long hold as a
+    small Monte Carlo over noise seeds, the others as one run at their own seed. ``done`` holds runs
+    already simulated on this patch, bench and machine, by scenario name, from the scenario's own
+    seed: run i depends on its seed alone, so their first runs stand in for simulating again."""
+    out = []
+    for name in scenarios:
+        sc = load_scenario(name)
+        runs = runs_hold if name == "hold-120s" else 1
+        if done is not None and len(done.get(name, ())) >= runs:
+            summaries = done[name][:runs]
+        else:
+            summaries = simulate(net, plant, bench, machine, sc, runs=runs, keep_history=False).runs
+        r0 = summaries[0]
+        ovl = sorted({o.amplifier for run in summaries for o in run.overloads})
+        out.append(Prediction(name, sc.description, runs, sum(r.held for r in summaries) / runs, r0.trip_time_s,
+                              r0.fall_time_s, max(x.max_abs_theta_deg for x in summaries),
+                              max(x.max_abs_s_m for x in summaries), ", ".join(ovl) or "none"))
+    return out
+
+
+def prediction_rows(preds: list[Prediction]) -> tuple[list[str], list[list[str]]]:
+    header = ["scenario", "runs", "held", "limit switch (run 0)", "fallen (run 0)", "max |theta| (deg)",
+              "max |s| (m)", "overloads"]
+    rows = []
+    for p in preds:
+        rows.append([p.scenario, str(p.runs), f"{100 * p.fraction_held:.0f} %",
+                     "no" if p.first_trip_s is None else f"at {p.first_trip_s:.2f} s",
+                     "no" if p.first_fall_s is None else f"at {p.first_fall_s:.2f} s",
+                     f"{p.max_theta_deg:.2f}", f"{p.max_s_m:.3f}", p.overloads])
+    return header, rows
+
+
+def diagnosis_note(net: Netlist, plant: PlantParams, bench: BenchProfile) -> str:
+    return "Linearised: " + "; ".join(lp.line() for lp in diagnose(net, plant, bench)) + "."

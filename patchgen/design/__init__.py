@@ -1,0 +1,1 @@
+"""The controller design: LQR, estimators, loop transfer recovery, margins and the design report."""

@@ -1,0 +1,107 @@
+"""The design's linear model: plant (eq. 2.28) plus optional integral states and actuator state.
+
+State order (conventions.md): s, theta, s_dot, theta_dot, [int_s], [int_theta], [actuator].
+The input is the commanded force u (N); u = -K x.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from patchgen.inputs.spec import MEASURED, DesignSpec
+from patchgen.plant.equations import PlantParams, linear_matrices
+
+
+@dataclass(frozen=True)
+class LinearModel:
+    states: tuple[str, ...]
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray  # measured outputs s, theta, s_dot
+    measured: tuple[str, ...]
+    n_plant: int  # plant states (4)
+    estimated: tuple[str, ...]  # states a Kalman estimator carries: plant + actuator
+
+    def index(self, name: str) -> int:
+        return self.states.index(name)
+
+    def submodel(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A, B, C restricted to the named states (for the estimator model)."""
+        idx = [self.index(n) for n in names]
+        return self.A[np.ix_(idx, idx)], self.B[idx, :], self.C[:, idx]
+
+
+def plant_params(spec: DesignSpec) -> PlantParams:
+    p = spec.plant
+    return PlantParams(M=p.M, m=p.m, l=p.l, g=p.g, b_VF=p.b_VF, c=p.c, d=p.d)
+
+
+def build_model(spec: DesignSpec, plant: PlantParams | None = None) -> LinearModel:
+    """Assemble A, B, C for the spec's states (optionally for a perturbed plant)."""
+    plant = plant or plant_params(spec)
+    Ap, Bp = linear_matrices(plant)
+    states = spec.states()
+    n = len(states)
+    A = np.zeros((n, n))
+    B = np.zeros((n, 1))
+    A[:4, :4] = Ap
+    integ = spec.integrators
+    if integ.int_s:
+        i = states.index("int_s")
+        A[i, 0] = 1.0
+        A[i, i] = -integ.int_s_leak
+    if integ.int_theta:
+        i = states.index("int_theta")
+        A[i, 1] = 1.0
+        A[i, i] = -integ.int_theta_leak
+    act = spec.actuator
+    if act.model == "gain":
+        B[:4] = Bp
+    else:
+        # x_a' = -x_a/tau + u/(tau*scale); lag: F = scale*x_a;
+        # lag_zero, F/u = (s + z)/(tau s + 1): F = u/tau + (z - 1/tau)*scale*x_a
+        i = states.index("actuator")
+        tau, scale = act.tau, act.state_scale
+        A[i, i] = -1.0 / tau
+        B[i, 0] = 1.0 / (tau * scale)
+        if act.model == "lag":
+            A[:4, i] = Bp[:, 0] * scale
+        else:
+            A[:4, i] = Bp[:, 0] * (act.zero - 1.0 / tau) * scale
+            B[:4] = Bp / tau
+    C = np.zeros((len(MEASURED), n))
+    for r, name in enumerate(MEASURED):
+        C[r, states.index(name)] = 1.0
+    estimated = tuple(s for s in states if not s.startswith("int_"))
+    return LinearModel(tuple(states), A, B, C, MEASURED, 4, estimated)
+
+
+def open_loop_poles(model: LinearModel) -> np.ndarray:
+    return _sorted(np.linalg.eigvals(model.A))
+
+
+def plant_zeros(spec: DesignSpec, output: str) -> np.ndarray:
+    """Finite transmission zeros of output/F_U for the 4-state plant (eq. 2.28)."""
+    Ap, Bp = linear_matrices(plant_params(spec))
+    C = np.zeros((1, 4))
+    C[0, ["s", "theta", "s_dot", "theta_dot"].index(output)] = 1.0
+    return _sorted(transmission_zeros(Ap, Bp, C))
+
+
+def transmission_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """Finite zeros of a SISO (A, B, C, 0): generalised eigenvalues of the Rosenbrock pencil."""
+    n = A.shape[0]
+    M = np.block([[A, B], [C, np.zeros((1, 1))]])
+    N = np.zeros((n + 1, n + 1))
+    N[:n, :n] = np.eye(n)
+    z = sla.eigvals(M, N)
+    return z[np.isfinite(z) & (np.abs(z) < 1e12)]
+
+
+def _sorted(v: np.ndarray) -> np.ndarray:
+    v = np.asarray(v, dtype=complex)
+    v = np.where(np.abs(v.imag) < 1e-12 * np.maximum(1.0, np.abs(v)), v.real + 0j, v)
+    return v[np.lexsort((v.imag, v.real))]

@@ -1,0 +1,69 @@
+"""The data patchgen ships inside its package: designs, scenarios, machine and bench profiles, templates.
+
+Everything is reached through :mod:`importlib.resources`, so an installed wheel finds its data
+wherever it is run from. A user names a shipped file by its stem (``bench-recommended``,
+``hold-120s``) or gives a path to a file of their own; a path that exists always wins.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from importlib.resources.abc import Traversable
+from pathlib import Path
+
+from patchgen.inputs.errors import InputError
+
+# kind -> folder inside the package
+FOLDERS = {
+    "design": "designs",
+    "scenario": "sims",
+    "machine": "profiles/machines",
+    "bench": "profiles/benches",
+    "template": "templates",
+}
+
+
+def folder(kind: str) -> Traversable:
+    """The package folder holding the shipped files of one kind."""
+    return resources.files("patchgen").joinpath(*FOLDERS[kind].split("/"))
+
+
+def shipped(kind: str) -> list[str]:
+    """Stems of the shipped TOML files of one kind, sorted."""
+    return sorted(p.name[:-5] for p in folder(kind).iterdir() if p.name.endswith(".toml"))
+
+
+def shipped_file(kind: str, name: str) -> Traversable:
+    """One shipped file by stem; unknown names are an InputError listing the known ones."""
+    f = folder(kind).joinpath(f"{name}.toml")
+    if not f.is_file():
+        raise InputError(name, "", f"no such file, and no shipped {kind} of that name "
+                                   f"(shipped: {', '.join(shipped(kind))})")
+    return f
+
+
+def resolve(kind: str, name_or_path: str | Path, source: str = "", field: str = "") -> Path | Traversable:
+    """A user's file by path, or a shipped one by stem (when no file of that name exists).
+
+    The error for a name that is neither names ``source`` and ``field`` when given (a profile
+    named in a spec), else the name itself.
+    """
+    text = str(name_or_path)
+    path = Path(text)
+    if text and (_exists(path) or path.suffix or "/" in text or "\\" in text or "\0" in text):
+        return path
+    f = folder(kind).joinpath(f"{text}.toml")
+    if text and _exists(f):
+        return f
+    known = ", ".join(shipped(kind))
+    if source:
+        raise InputError(source, field, f"unknown {kind} {text!r} (known: {known})")
+    raise InputError(text or "''", field, f"no such file, and no shipped {kind} of that name (shipped: {known})")
+
+
+def _exists(path: Path | Traversable) -> bool:
+    """Whether anything is at path; a name the OS refuses (too long, say) is left for the reader to name."""
+    try:
+        return path.exists() if isinstance(path, Path) else path.is_file()
+    except (OSError, ValueError):
+        return isinstance(path, Path)

@@ -1,0 +1,161 @@
+"""Simulation scenarios: initial state, disturbances, duration, noise and drift, seed (TOML files).
+
+Noise and drift are ``"profile"`` (as the bench and machine profiles say), ``"off"``, or explicit:
+noise as a table of V rms levels (``s``, ``theta``, ``s_dot`` sensors, ``amplifier`` output noise;
+a level left out is zero), drift as one rate in V/s for every integrating amplifier.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import Field, PrivateAttr, ValidationInfo, field_validator
+
+from patchgen.inputs.errors import InputError
+from patchgen.inputs.fields import InputModel, Int, Real, bounded, magnitude
+from patchgen.inputs.resources import resolve
+from patchgen.inputs.validation import read_toml, validate
+
+MAX_DURATION_S = 1e5  # about a day: longer than any bench experiment
+LEVEL_MAX_V = 100.0  # noise levels (V rms) and drift rates (V/s): far beyond any machine's rails
+
+
+class InitialState(InputModel):
+    """Plant state at t = 0 (SI units; the angle in rad or in degrees, not both): the angle within
+    +/-180 deg, the cart within 100 m (and, against a spec, inside its track)."""
+
+    s: magnitude(100.0) = 0.0
+    theta: magnitude(math.pi) | None = None
+    theta_deg: magnitude(180.0) | None = Field(default=None, validate_default=True)
+    s_dot: magnitude(100.0) = 0.0
+    theta_dot: magnitude(1000.0) = 0.0
+
+    @field_validator("theta_deg", mode="after")
+    @classmethod
+    def _one_angle(cls, v, info: ValidationInfo):
+        if v is not None and info.data.get("theta") is not None:
+            raise ValueError("give theta (rad) or theta_deg, not both")
+        return v
+
+    def vector(self) -> tuple[float, float, float, float]:
+        """[s, theta, s_dot, theta_dot] in SI units."""
+        th = self.theta if self.theta is not None else math.radians(self.theta_deg or 0.0)
+        return (self.s, th, self.s_dot, self.theta_dot)
+
+
+_NEEDS = {"force_impulse": ("at", "duration_s", "force_N"), "step": ("size_m",)}
+
+
+class Disturbance(InputModel):
+    """A push or a command during the run.
+
+    ``force_impulse``: a horizontal force ``force_N`` on the pendulum tip or on the cart from
+    ``time_s`` for ``duration_s``. ``step``: the cart position command steps by ``size_m`` at
+    ``time_s`` (an offset on the s sensor's reference, so the loop moves the cart there).
+    """
+
+    kind: Literal["force_impulse", "step"]
+    time_s: Real = bounded(0, MAX_DURATION_S)
+    at: Literal["pendulum_tip", "cart"] | None = Field(default=None, validate_default=True)
+    duration_s: Real | None = bounded(0, MAX_DURATION_S, open_lo=True, default=None, validate_default=True)
+    force_N: magnitude(1e4) | None = Field(default=None, validate_default=True)
+    size_m: magnitude(100.0) | None = Field(default=None, validate_default=True)
+
+    @field_validator("at", "duration_s", "force_N", "size_m", mode="after")
+    @classmethod
+    def _for_kind(cls, v, info: ValidationInfo):
+        kind = info.data.get("kind")
+        if kind is None:  # the kind itself is wrong, and reported
+            return v
+        needed = info.field_name in _NEEDS[kind]
+        if needed and v is None:
+            raise ValueError(f"missing field (needed for kind {kind!r})")
+        if not needed and v is not None:
+            raise ValueError(f"does not apply to kind {kind!r}")
+        return v
+
+
+Level = Annotated[Real, Field(ge=0, le=LEVEL_MAX_V)]
+
+
+class NoiseLevels(InputModel):
+    """Noise: as the profiles say, off, or explicit levels in V rms (sensors and every
+    amplifier's output; the levels count only in mode 'explicit')."""
+
+    mode: Literal["profile", "off", "explicit"] = "explicit"
+    s: Level | None = None
+    theta: Level | None = None
+    s_dot: Level | None = None
+    amplifier: Level | None = None
+
+    def level(self, name: str) -> float:
+        """An explicit level in V rms (one left out is zero)."""
+        return getattr(self, name, None) or 0.0
+
+
+class Scenario(InputModel):
+    """One simulation case. ``dt_s`` overrides the engine's step; ``record_dt_s`` is the history
+    sample interval; ``fall_angle_deg`` is where the pendulum counts as fallen."""
+
+    name: str = ""
+    description: str = ""
+    duration_s: Real = bounded(0, MAX_DURATION_S, open_lo=True)
+    dt_s: Real | None = bounded(1e-6, 0.05, default=None)
+    record_dt_s: Real = bounded(1e-6, 1e3, default=0.01)
+    seed: Int = Field(default=0, ge=0, lt=2**63)
+    fall_angle_deg: Real = bounded(0, 180, open_lo=True, default=30.0)
+    initial: InitialState = InitialState()
+    disturbances: list[Disturbance] = Field(default_factory=list, max_length=1000)
+    noise: NoiseLevels = NoiseLevels(mode="profile")
+    drift: Literal["profile", "off"] | Level = "profile"
+
+    _path: str = PrivateAttr(default="<scenario>")
+
+    @property
+    def path(self) -> str:
+        """The file it was read from (or a label for a scenario built in code)."""
+        return self._path
+
+    @field_validator("noise", mode="before")
+    @classmethod
+    def _noise_word(cls, v):
+        if isinstance(v, str) and v in ("profile", "off"):
+            return {"mode": v}
+        if not isinstance(v, (dict, NoiseLevels)):
+            raise ValueError("must be 'profile', 'off' or a table of V rms levels "
+                             "(s, theta, s_dot, amplifier)")
+        return v
+
+    @field_validator("drift", mode="before")
+    @classmethod
+    def _drift_word(cls, v):
+        if isinstance(v, str) and v not in ("profile", "off"):
+            raise ValueError("must be 'profile', 'off' or a rate in V/s")
+        if isinstance(v, bool) or (not isinstance(v, str) and not isinstance(v, (int, float))):
+            raise ValueError("must be 'profile', 'off' or a rate in V/s")
+        if isinstance(v, (int, float)) and v < 0:
+            raise ValueError("a drift rate is a magnitude in V/s (>= 0); its sign is drawn per run")
+        return v
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and check a scenario TOML file, or a shipped scenario by name (``hold-120s``); its name
+    defaults to the file's stem."""
+    sc = validate(Scenario, read_toml(resolve("scenario", path)), str(path))
+    sc = sc if sc.name else sc.model_copy(update={"name": Path(str(path)).stem})
+    sc._path = str(path)
+    for i, d in enumerate(sc.disturbances):
+        if d.time_s >= sc.duration_s:
+            raise InputError(sc.path, f"disturbances[{i}].time_s", f"{d.time_s:g} s is not before the end of "
+                             f"the run (duration_s = {sc.duration_s:g} s)")
+    return sc
+
+
+def check_on_track(sc: Scenario, track_m: float, spec_path: str) -> None:
+    """The initial cart position must be inside the track between the limit switches of the spec's
+    plant (d, from ``spec_path``), or the run would end before it starts."""
+    if abs(sc.initial.s) >= track_m / 2:
+        raise InputError(sc.path, "initial.s", f"{sc.initial.s:g} m is outside the track: the limit switches of "
+                         f"{spec_path} are at +/-{track_m / 2:g} m (plant.d = {track_m:g} m)")

@@ -1,0 +1,281 @@
+"""The design spec: what a user writes (TOML) to describe plant, sensors, actuator, weights,
+integral states, estimator and target machine. Units are documented in docs/spec.md.
+
+The spec's [actuator] is the *design model*; what the patch meets on the bench is the bench
+profile named by ``bench`` (patchgen/profiles/benches/), kept apart on purpose.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, PrivateAttr
+
+from patchgen.inputs.errors import InputError
+from patchgen.inputs.fields import InputModel, Int, Real, bounded, zero_or_at_least
+from patchgen.inputs.resources import resolve
+from patchgen.inputs.validation import read_toml, validate
+
+PLANT_STATES = ("s", "theta", "s_dot", "theta_dot")
+MEASURED = ("s", "theta", "s_dot")
+
+# weights: Q entries and R within WEIGHT_RANGE (a weight is relative, and a spread of more than
+# 1e16 between them leaves the Riccati solver little but rounding error); Bryson excursions
+# within EXCURSION_RANGE (their squares' inverses then stay inside WEIGHT_RANGE)
+WEIGHT_RANGE = (1e-8, 1e8)
+EXCURSION_RANGE = (1e-4, 1e4)
+NOISE_MAX = 1e12  # entries of the estimator's W and V
+GAMMA_MAX = 1e6  # entries of the noise input matrix Gamma
+MIN_V_EIGENVALUE = 1e-12  # the measurement noise is inverted: it must be clear of singular
+Entry = Annotated[Real, Field(ge=-NOISE_MAX, le=NOISE_MAX)]
+Weight = Annotated[Real, Field(ge=-WEIGHT_RANGE[1], le=WEIGHT_RANGE[1])]
+
+
+class PlantSpec(InputModel):
+    """Table B.1 parameters, SI units, within the bounds of a bench-sized cart and pendulum."""
+
+    M: Real = bounded(0.01, 100, description="cart mass, kg (10 g to 100 kg)")
+    m: Real = bounded(1e-3, 10, description="pendulum mass, kg (1 g to 10 kg)")
+    l: Real = bounded(0.01, 10, description="effective pendulum length, m (1 cm to 10 m)")
+    g: Real = bounded(1, 30, default=9.807, description="gravity, m/s^2 (the Moon's 1.6 to Jupiter's 25)")
+    b_VF: Real = bounded(0, 1000, description="cart viscous friction, kg/s")
+    c: Real = bounded(0, 10, description="pendulum rotational friction, kg m^2/s")
+    d: Real = bounded(0.05, 20, default=1.090, description="usable track length between the switches, m")
+
+
+SENSOR_RANGE = (1e-3, 1e3)  # V per SI unit: a millivolt to a kilovolt per metre, radian, m/s
+
+
+class SensorSpec(InputModel):
+    """Sensor constants (table A.2), volts per SI unit. theta_dot is the scale of the voltage
+    that carries theta_dot on the machine (differentiator or estimator output)."""
+
+    s: Real = bounded(*SENSOR_RANGE, description="V/m")
+    theta: Real = bounded(*SENSOR_RANGE, description="V/rad")
+    s_dot: Real = bounded(*SENSOR_RANGE, description="V/(m/s)")
+    theta_dot: Real | None = bounded(*SENSOR_RANGE, default=None, description="V/(rad/s); default theta x 1 s")
+
+
+MIN_LAG_S = 1e-3  # a lag shorter than 1 ms is a gain to the loop, and would set a needlessly fine step
+
+
+class ActuatorSpec(InputModel):
+    """The actuator model the design assumes: force per command volt, with optional lag."""
+
+    model: Literal["gain", "lag", "lag_zero"] = "gain"
+    K_U: Real = bounded(0.01, 1000, description="N/V (N s/V for lag_zero)")
+    tau: Annotated[Real, zero_or_at_least(MIN_LAG_S)] = bounded(0, 10, default=0.0,
+                                                               description="lag time constant, s")
+    state_scale: Real = bounded(1e-3, 1e3, default=1.0, description="actuator state = F_U / state_scale")
+    zero: Real = bounded(0, 1e3, default=1e-5, description="lag_zero: F/F_cmd = (s + zero)/(tau s + 1), rad/s; "
+                         "a zero exactly at 0 cancels the cart's position pole (not stabilisable)")
+    dead_zone_V: Real = bounded(0, 100, default=0.0, description="not seen by a linear design; reported")
+
+
+class WeightsSpec(InputModel):
+    """LQR weights: Q (diagonal by state name, or a full matrix in state order) and R, or
+    Bryson's maximum excursions (eq. 4.9-4.10)."""
+
+    Q: dict[str, Real] | list[list[Weight]] | None = None
+    R: Real | None = None
+    bryson: dict[str, Real] | None = None
+
+
+class IntegratorsSpec(InputModel):
+    int_s: bool = False
+    int_theta: bool = False
+    int_s_leak: Real = bounded(0, 1, default=2e-5, description="1/s, keeps the Riccati solver off the axis")
+    int_theta_leak: Real = bounded(0, 1, default=1e-5, description="1/s")
+
+
+class EstimatorSpec(InputModel):
+    kind: Literal["none", "differentiator", "filtered_differentiator", "reduced_observer", "kalman"] = "none"
+    W: Entry | list[list[Entry]] = 1.0
+    V: list[Entry] | list[list[Entry]] = [1.0, 1.0, 1.0]
+    Gamma: Literal["B"] | list[Annotated[Real, Field(ge=-GAMMA_MAX, le=GAMMA_MAX)]] | list[
+        list[Annotated[Real, Field(ge=-GAMMA_MAX, le=GAMMA_MAX)]]] = "B"
+    rho: Annotated[Real, Field(gt=0, le=1e12)] | Literal["auto"] = 1.0
+    rho_max: Real = bounded(0, 1e12, open_lo=True, default=1e12)
+    rolloff_s: Real | None = bounded(1e-4, 1, default=None, description="differentiator roll-off, s "
+                                     "(filtered_differentiator: none = chosen from the bench noise)")
+    observer_pole: Real | None = bounded(1e-2, 1e4, default=None, description="reduced_observer: error decay "
+                                         "rate, rad/s (none = chosen from the bench noise)")
+
+
+class PatchSpec(InputModel):
+    units: Annotated[Int, Field(ge=1, le=16)] | Literal["auto"] = Field(
+        default=1, description="machines slaved together: a number, or \"auto\" for the fewest that fit "
+        "(at most the profile's max_units)")
+    below_resolution: Literal["round", "minimum", "omit"] = Field(
+        default="round", description="a coefficient below the pot resolution: round to the dial, "
+        "set the minimum dial value, or leave the signal out")
+
+
+class DesignSpec(InputModel):
+    name: str
+    description: str = ""
+    source: str = ""
+    machine: str = "gp6"
+    bench: str = "uw-1991"
+    plant: PlantSpec
+    sensors: SensorSpec
+    actuator: ActuatorSpec
+    weights: WeightsSpec
+    integrators: IntegratorsSpec = IntegratorsSpec()
+    estimator: EstimatorSpec = EstimatorSpec()
+    patch: PatchSpec = PatchSpec()
+
+    _path: str = PrivateAttr(default="<spec>")
+
+    @property
+    def path(self) -> str:
+        return self._path
+
+    def states(self) -> list[str]:
+        """State names in order: plant states, integral states, actuator state."""
+        out = list(PLANT_STATES)
+        if self.integrators.int_s:
+            out.append("int_s")
+        if self.integrators.int_theta:
+            out.append("int_theta")
+        if self.actuator.model != "gain":
+            out.append("actuator")
+        return out
+
+    def error(self, field: str, message: str) -> InputError:
+        return InputError(self._path, field, message)
+
+    def theta_dot_scale(self) -> float:
+        return self.sensors.theta_dot if self.sensors.theta_dot is not None else self.sensors.theta
+
+
+def load_spec(path: str | Path) -> DesignSpec:
+    """Read and fully check a design spec (a file, or a shipped design by name such as
+    ``bench-recommended``); every problem is an InputError naming file and field."""
+    spec = validate(DesignSpec, read_toml(resolve("design", path)), str(path))
+    spec._path = str(path)
+    check_spec(spec)
+    return spec
+
+
+def q_matrix(spec: DesignSpec) -> np.ndarray:
+    states = spec.states()
+    n = len(states)
+    w = spec.weights
+    if w.bryson is not None:
+        Q = np.zeros((n, n))
+        for name, sigma in w.bryson.items():
+            if name == "u":
+                continue
+            Q[states.index(name), states.index(name)] = 1.0 / sigma**2
+        return Q
+    if isinstance(w.Q, dict):
+        Q = np.zeros((n, n))
+        for name, q in w.Q.items():
+            Q[states.index(name), states.index(name)] = q
+        return Q
+    return np.array(w.Q, dtype=float)
+
+
+def r_matrix(spec: DesignSpec) -> np.ndarray:
+    w = spec.weights
+    if w.bryson is not None:
+        return np.array([[1.0 / w.bryson["u"] ** 2]])
+    return np.array([[float(w.R)]])
+
+
+def matrix(rows: list[list[float]], field: str, err) -> np.ndarray:
+    """A list of rows as a 2-D array; an empty or ragged matrix is named at the row at fault."""
+    if not rows or not rows[0]:
+        raise err(field, "an empty matrix")
+    for i, row in enumerate(rows):
+        if len(row) != len(rows[0]):
+            raise err(f"{field}[{i}]", f"has {len(row)} values where row 0 has {len(rows[0])} "
+                                       "(a matrix needs rows of one length)")
+    return np.array(rows, dtype=float)
+
+
+def _in_range(value: float, field: str, bounds: tuple[float, float], what: str, err) -> None:
+    lo, hi = bounds
+    if not lo <= value <= hi:
+        raise err(field, f"{what} must be positive, between {lo:g} and {hi:g} (got {value:g})")
+
+
+def check_spec(spec: DesignSpec) -> None:
+    """Checks that need more than one field: weights against the states, estimator shapes."""
+    states = spec.states()
+    w = spec.weights
+    err = spec.error
+    if w.bryson is not None:
+        if w.Q is not None or w.R is not None:
+            raise err("weights", "give either Q and R or bryson, not both")
+        for name, sigma in w.bryson.items():
+            if name != "u" and name not in states:
+                raise err(f"weights.bryson.{name}", f"unknown state name (states: {', '.join(states)})")
+            _in_range(sigma, f"weights.bryson.{name}", EXCURSION_RANGE, "a maximum excursion", err)
+        if "u" not in w.bryson:
+            raise err("weights.bryson.u", "missing field (maximum control force, N)")
+    else:
+        if w.Q is None:
+            raise err("weights.Q", "missing field (or give weights.bryson)")
+        if w.R is None:
+            raise err("weights.R", "missing field")
+        if isinstance(w.Q, dict):
+            for name, q in w.Q.items():
+                if name not in states:
+                    raise err(f"weights.Q.{name}", f"unknown state name (states: {', '.join(states)})")
+                if not (q == 0 or WEIGHT_RANGE[0] <= q <= WEIGHT_RANGE[1]):
+                    raise err(f"weights.Q.{name}", f"must be >= 0: 0, or between {WEIGHT_RANGE[0]:g} and "
+                                                   f"{WEIGHT_RANGE[1]:g} (got {q:g})")
+        else:
+            Q = matrix(w.Q, "weights.Q", err)
+            n = len(states)
+            if Q.shape != (n, n):
+                raise err("weights.Q", f"must be {n}x{n} for states {', '.join(states)} "
+                                       f"(got {Q.shape[0]}x{Q.shape[1]})")
+            tiny = np.argwhere((Q != 0) & (np.abs(Q) < WEIGHT_RANGE[0]))
+            if len(tiny):
+                i, j = tiny[0]
+                raise err(f"weights.Q[{i}][{j}]", f"a weight is 0 or at least {WEIGHT_RANGE[0]:g} in magnitude "
+                                                  f"(got {Q[i, j]:g})")
+            if not np.allclose(Q, Q.T, atol=1e-12 * max(1.0, np.abs(Q).max())):
+                raise err("weights.Q", "must be symmetric")
+            if np.linalg.eigvalsh(Q).min() < -1e-10 * max(1.0, np.abs(Q).max()):
+                raise err("weights.Q", "must be positive semi-definite")
+        _in_range(w.R, "weights.R", WEIGHT_RANGE, "a control weight", err)
+    a = spec.actuator
+    if a.model != "gain" and a.tau <= 0:
+        raise err("actuator.tau", f"a {a.model} actuator needs a positive time constant (at least {MIN_LAG_S:g} s)")
+    if spec.estimator.kind == "kalman":
+        _check_kalman(spec, 4 + (1 if a.model != "gain" else 0))
+
+
+def _check_kalman(spec: DesignSpec, n_est: int) -> None:
+    """Shapes and definiteness of the Kalman estimator's noise model."""
+    e = spec.estimator
+    err = spec.error
+    W = np.atleast_2d(e.W) if isinstance(e.W, float) else matrix(e.W, "estimator.W", err)
+    if isinstance(e.Gamma, str):
+        n_w = 1
+    elif not e.Gamma:
+        raise err("estimator.Gamma", "an empty matrix")
+    else:
+        G = np.array(e.Gamma, dtype=float)[:, None] if not isinstance(e.Gamma[0], list) else \
+            matrix(e.Gamma, "estimator.Gamma", err)
+        if G.shape[0] != n_est:
+            raise err("estimator.Gamma", f"needs {n_est} rows (estimated states), got {G.shape[0]}")
+        n_w = G.shape[1]
+    if W.shape != (n_w, n_w):
+        raise err("estimator.W", f"must be {n_w}x{n_w} to match Gamma (got {W.shape[0]}x{W.shape[1]})")
+    if np.linalg.eigvalsh((W + W.T) / 2).min() < 0:
+        raise err("estimator.W", "must be positive semi-definite")
+    if e.V and isinstance(e.V[0], list):
+        V = matrix(e.V, "estimator.V", err)
+    else:
+        V = np.diag(np.array(e.V, dtype=float)) if e.V else np.zeros((0, 0))
+    if V.shape != (3, 3):
+        raise err("estimator.V", f"must be 3 values or 3x3 for the measured {', '.join(MEASURED)}")
+    if np.linalg.eigvalsh((V + V.T) / 2).min() < MIN_V_EIGENVALUE:
+        raise err("estimator.V", f"must be positive definite (smallest eigenvalue at least {MIN_V_EIGENVALUE:g})")

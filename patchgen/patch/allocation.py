@@ -1,0 +1,336 @@
+"""Allocation: put a realization's blocks on the machine's amplifiers and pots, every sign tracked.
+
+Every amplifier inverts. A block's amplifier output is P * (its signal) with a polarity P
+chosen here; an input term c_j v_j must then arrive as -P sign(c_j) v_j. A term whose signal
+is available only at the other polarity is served either by a shared inverter of that signal
+or by one pre-summer per consuming block that collects all its mismatched terms. The choice
+of polarities and inverters that needs the fewest amplifiers wins (ties: fewer inverters,
+then the first in a fixed order), so the result is deterministic.
+
+Coefficient magnitudes go on the smallest input weight w (the profile's, e.g. x1 and x10) with
+|c| <= w * pot_max, through a pot set to |c|/w; a coefficient equal to a weight needs no pot; one
+above the largest weight is an error.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+from patchgen.inputs.errors import ResourceError
+from patchgen.patch.netlist import AmpInput, Amplifier, ControlOutput, Netlist, Pot, SensorInput, Signal
+from patchgen.patch.realization import SENSOR_LABELS, SENSOR_UNITS, Block, Realization, Term
+from patchgen.profiles.machine import MachineProfile
+
+ROLE = {"sum": "summer", "integrate": "integrator", "differentiate": "differentiator", "lag": "lag"}
+SLOT_ROLE = {"summer": "summer", "inverter": "inverter", "integrator": "integrator",
+             "differentiator": "differentiator", "lag": "integrator"}
+
+
+@dataclass(frozen=True)
+class _Stage:
+    """An amplifier to be placed: a block, a pre-summer for a block, or an inverter of a signal."""
+
+    key: str  # block name, "pre:<block>" or "inv:<signal>"
+    role: str
+    terms: tuple[tuple[str, int, float], ...]  # (source key, source polarity needed, |coefficient|)
+    out_signal: str
+    out_polarity: int
+    block: Block | None
+
+
+def _quantise(setting: float, res: float) -> float:
+    return round(round(setting / res) * res, 12)
+
+
+def _plan_terms(real: Realization, machine: MachineProfile, source: str):
+    """Apply the pot-resolution policy; returns kept terms per block and notes."""
+    res = machine.pot_resolution
+    notes: list[str] = []
+    too_big: list[str] = []
+    kept: dict[str, list[Term]] = {}
+    for b in real.blocks:
+        kept[b.name] = []
+        for t in b.terms:
+            mag = abs(t.coeff)
+            if mag == 0:
+                continue
+            top = max(machine.input_weights)
+            if mag > top * machine.pot_max + 1e-12:
+                too_big.append(f"coefficient {t.coeff:.4g} of {t.signal} into {b.name} exceeds {top:g}, the most "
+                               f"one x{top} input gives")
+            if mag < res / 2 or (mag < res and real.below_resolution != "round"):
+                if real.below_resolution == "minimum":
+                    notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the dial "
+                                 f"resolution {res:g}; set to the minimum {res:g}, as the thesis did")
+                    kept[b.name].append(Term(t.signal, math.copysign(res, t.coeff), t.coeff))
+                else:
+                    notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the dial "
+                                 f"resolution {res:g}; left out")
+                continue
+            kept[b.name].append(t)
+    # drop blocks nobody uses any more (e.g. an integrator whose only term was left out)
+    used = {"u_c"}
+    changed = True
+    while changed:
+        changed = False
+        for name in sorted(used):
+            for t in kept.get(name, []):
+                if t.signal not in used and t.signal in kept:
+                    used.add(t.signal)
+                    changed = True
+    blocks = [b for b in real.blocks if b.name in used]
+    for b in real.blocks:
+        if b.name not in used:
+            notes.append(f"{b.name} is not needed once its coefficient is left out: no amplifier for it")
+    return blocks, kept, notes, too_big
+
+
+def _jacks_fit(blocks: list[Block], kept: dict[str, list[Term]], P: dict[str, int], inv: set[str],
+               pre: dict[str, set[str]], machine: MachineProfile | None) -> bool:
+    """Whether every stage's x1 and x10 inputs fit the roomiest amplifier of the machine."""
+    if machine is None:
+        return True
+    ws = machine.input_weights
+    cap = {w: max(a.input_count(w) for a in machine.amplifiers) for w in ws}
+    for b in blocks:
+        main = {w: 0 for w in ws}
+        staged = {w: 0 for w in ws}
+        if b.name in pre:
+            main[min(ws)] += 1
+        for t in kept[b.name]:
+            w = weight_for(abs(t.coeff), machine)
+            (staged if t.signal in pre.get(b.name, ()) else main)[w] += 1
+        if any(main[w] > cap[w] or staged[w] > cap[w] for w in ws):
+            return False
+    return True
+
+
+def _search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile | None = None):
+    """Choose block polarities and shared inverters minimising amplifiers (with inputs that fit)."""
+    free = [b.name for b in blocks if b.name != "u_c"]
+    best = None
+    for pols in itertools.product((-1, 1), repeat=len(free)):
+        P = dict(zip(free, pols))
+        P["u_c"] = 1
+        mism: dict[str, set[str]] = {}
+        for b in blocks:
+            for t in kept[b.name]:
+                have = P.get(t.signal, 1)  # sensors are positive
+                need = -P[b.name] * (1 if t.coeff > 0 else -1)
+                if have != need:
+                    mism.setdefault(b.name, set()).add(t.signal)
+        cand = sorted(set().union(*mism.values())) if mism else []
+        for k in range(len(cand) + 1):
+            for inv in itertools.combinations(cand, k):
+                pre = [b for b, m in mism.items() if not m <= set(inv)]
+                # a differentiator takes a single input: a pre-summer feeds it fine
+                cost = (len(inv) + len(pre), len(inv))
+                if best is not None and cost >= best[0]:
+                    continue
+                if _jacks_fit(blocks, kept, P, set(inv), {b: mism[b] - set(inv) for b in pre}, machine):
+                    best = (cost, P, set(inv), {b: mism[b] - set(inv) for b in pre})
+    if best is None:  # nothing fits the jacks: keep the cheapest, the emitter names the shortfall
+        return _search(blocks, kept, None)
+    return best[1], best[2], best[3]
+
+
+def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>") -> Netlist:
+    """Place the realization on the machine; a shortfall raises ResourceError (one line)."""
+    blocks, kept, notes, too_big = _plan_terms(real, machine, source)
+    _check_lower_bound(blocks, kept, machine, source)
+    P, inverted, _ = _search(blocks, kept, machine)
+    stages: list[_Stage] = []
+    wanted: dict[tuple[str, str, float], float] = {}
+    for b in blocks:
+        direct, staged = [], []
+        for t in kept[b.name]:
+            need = -P[b.name] * (1 if t.coeff > 0 else -1)
+            have = P.get(t.signal, 1)
+            if have == need:
+                direct.append((t.signal, have, t.coeff))
+            elif t.signal in inverted:
+                direct.append((f"inv:{t.signal}", -have, t.coeff))
+            else:
+                staged.append((t.signal, have, t.coeff))
+            wanted[(b.name, t.signal, t.coeff)] = t.wanted
+        if staged:
+            # pre-summer output = -sum |c| (have v) = -P sum c v: enters the block with weight 1
+            stages.append(_Stage(f"pre:{b.name}", "summer", tuple(staged), b.name, -P[b.name], None))
+            direct.append((f"pre:{b.name}", None, None))
+        stages.append(_Stage(b.name, ROLE[b.kind], tuple(direct), b.name, P[b.name], b))
+    for sig in sorted(inverted):
+        stages.insert(0, _Stage(f"inv:{sig}", "inverter", ((sig, None, 1.0),), sig, -P.get(sig, 1), None))
+    _check_resources(stages, machine, real, source)
+    if too_big:
+        raise ResourceError(source, "machine", too_big[0] + f" ({len(too_big)} such coefficients)")
+    return _emit(real, machine, stages, P, notes, wanted)
+
+
+def _check_lower_bound(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile,
+                       source: str) -> None:
+    """Fail fast, before the polarity search, when even one amplifier per block is too many."""
+    need_amp = len(blocks)
+    need_int = sum(1 for b in blocks if SLOT_ROLE[ROLE[b.kind]] == "integrator")
+    need_pot = sum(1 for b in blocks for t in kept[b.name] if _needs_pot(abs(t.coeff), machine))
+    have_int = sum(1 for a in machine.amplifiers if "integrator" in a.roles)
+    have_amp = len(machine.amplifiers)
+    if need_int > have_int or need_amp > have_amp or need_pot > machine.pot_count:
+        raise ResourceError(source, "machine",
+                            f"the patch needs at least {need_amp} amplifiers ({need_int} integrators) and {need_pot} "
+                            f"pots; the {machine.name} has {have_amp} amplifiers ({have_int} integrators) and "
+                            f"{machine.pot_count} pots")
+
+
+def _check_resources(stages: list[_Stage], machine: MachineProfile, real: Realization, source: str) -> None:
+    need_int = sum(1 for s in stages if SLOT_ROLE[s.role] == "integrator")
+    need_amp = len(stages)
+    need_pot = sum(1 for s in stages for (_, _, c) in s.terms if c is not None and _needs_pot(abs(c), machine))
+    have_int = sum(1 for a in machine.amplifiers if "integrator" in a.roles)
+    have_amp = len(machine.amplifiers)
+    short = need_int > have_int or need_amp > have_amp or need_pot > machine.pot_count
+    if short:
+        raise ResourceError(source, "machine",
+                            f"the patch needs {need_amp} amplifiers ({need_int} integrators) and {need_pot} pots; "
+                            f"the {machine.name} has {have_amp} amplifiers ({have_int} integrators) and "
+                            f"{machine.pot_count} pots")
+
+
+def weight_for(mag: float, machine: MachineProfile) -> int:
+    """The smallest input weight that reaches |c| through a pot (the largest if none does)."""
+    ws = sorted(machine.input_weights)
+    return next((w for w in ws if mag <= w * machine.pot_max + 1e-12), ws[-1])
+
+
+def _needs_pot(mag: float, machine: MachineProfile) -> bool:
+    return not any(math.isclose(mag, w, rel_tol=1e-12) for w in machine.input_weights)
+
+
+def _assign_slots(stages: list[_Stage], machine: MachineProfile) -> dict[str, str]:
+    """Most constrained first: integrators and lags on integrator slots, then the rest on slots
+    that cannot integrate, keeping integrators free."""
+    free = list(machine.amplifiers)
+    out: dict[str, str] = {}
+    order = sorted(stages, key=lambda s: (0 if SLOT_ROLE[s.role] == "integrator" else
+                                          1 if s.role == "differentiator" else 2))
+    for st in order:
+        want = SLOT_ROLE[st.role]
+        fits = [a for a in free if want in a.roles]
+        fits.sort(key=lambda a: ("integrator" in a.roles and want != "integrator", len(a.roles)))
+        if not fits:
+            raise ResourceError("<machine>", "machine", f"no free amplifier can be a {want} for {st.key}")
+        out[st.key] = fits[0].id
+        free.remove(fits[0])
+    return out
+
+
+def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: dict[str, int],
+          notes: list[str], wanted: dict[tuple[str, str, float], float]) -> Netlist:
+    slot = _assign_slots(stages, machine)
+    res = machine.pot_resolution
+    by_key = {s.key: s for s in stages}
+    sensors = [SensorInput(id=s, label=SENSOR_LABELS[s], quantity=s, unit=SENSOR_UNITS[s], volts_per_unit=v)
+               for s, v in real.sensors.items()]
+    blocks = {b.name: b for b in real.blocks}
+
+    def src_id(key: str) -> str:
+        if key in real.sensors:
+            return key
+        return slot[key]
+
+    amps: list[Amplifier] = []
+    pots: list[Pot] = []
+    # amplifiers listed in slot order for a stable netlist
+    for st in sorted(stages, key=lambda s: [a.id for a in machine.amplifiers].index(slot[s.key])):
+        inputs: list[AmpInput] = []
+        used = {w: 0 for w in machine.input_weights}
+        for (sk, have, c) in st.terms:
+            if c is None:  # pre-summer into its block
+                w, setting = min(machine.input_weights), None
+            else:
+                mag = abs(c)
+                w = weight_for(mag, machine)
+                setting = None if not _needs_pot(mag, machine) else mag / w
+            jack = f"x{w}{'abcdefgh'[used[w]]}"
+            used[w] += 1
+            slot_def = next(a for a in machine.amplifiers if a.id == slot[st.key])
+            if used[w] > slot_def.input_count(w):
+                raise ResourceError("<machine>", "machine",
+                                    f"amplifier {slot[st.key]} ({st.key}) needs {used[w]} x{w} inputs, has "
+                                    f"{slot_def.input_count(w)}")
+            pot_id = None
+            if setting is not None:
+                pot_id = _next_pot(pots, slot[st.key], machine)
+                q = _quantise(setting, res)
+                # realised signed coefficient from the wiring: the stage inverts; its output is
+                # out_pol * signal; the source arrives with polarity `have`
+                sign_c = 1 if c > 0 else -1
+                realized = sign_c * q * w
+                pots.append(Pot(id=pot_id, setting=q, source=src_id(sk), amplifier=slot[st.key], jack=jack,
+                                weight=w, signal=_signal_name(sk, have, by_key, P),
+                                coefficient=wanted.get((st.out_signal, sk.split(":")[-1], c), c),
+                                realized=realized,
+                                note=_pot_note(wanted.get((st.out_signal, sk.split(":")[-1], c), c), c)))
+            inputs.append(AmpInput(source=src_id(sk), pot=pot_id, weight=w, jack=jack))
+        b = st.block
+        quantity = st.out_signal
+        if b is not None:
+            vpu, unit = b.volts_per_unit, b.unit
+        elif st.out_signal in blocks:
+            vpu, unit = blocks[st.out_signal].volts_per_unit, blocks[st.out_signal].unit
+        else:
+            vpu, unit = real.sensors[st.out_signal], SENSOR_UNITS[st.out_signal]
+        purpose = (b.purpose if b is not None else
+                   f"partial sum for {st.out_signal} (terms needing the other sign)" if st.key.startswith("pre:")
+                   else f"inverts {st.out_signal}")
+        amps.append(Amplifier(id=slot[st.key], role=st.role, inputs=inputs,
+                              carries=Signal(quantity=quantity if not st.key.startswith("pre:") else
+                                             f"partial {quantity}",
+                                             polarity=st.out_polarity, volts_per_unit=vpu, unit=unit),
+                              ic_V=0.0 if st.role in ("integrator", "lag") else None,
+                              T_d_s=b.T_d_s if b is not None else None,
+                              rolloff_s=b.rolloff_s if b is not None else None,
+                              tau_s=b.tau_s if b is not None else None, purpose=purpose))
+    ints = [a.id for a in amps if a.role in ("integrator", "lag")]
+    operation = [
+        "Patch with the machine in POT SET, servo amplifier off.",
+        "Set each pot in POT SET mode with its load connected (the dial then reads the loaded coefficient).",
+    ]
+    if ints:
+        operation.append(f"IC: integrators {', '.join(ints)} to 0 V (IC jacks grounded); check the outputs read 0.")
+    operation += ["OP: switch to operate with the pendulum held upright, then power the servo amplifier.",
+                  "Watch the overload lamps; HD (hold) freezes the integrators if one lights."]
+    return Netlist(design=real.design_name, machine=machine.id, machine_name=machine.name,
+                   reference_V=machine.reference_V, time_scale_s=machine.time_scale_s,
+                   pot_resolution=res, sensors=sensors, amplifiers=amps, pots=pots,
+                   output=ControlOutput(source=slot["u_c"], K_U_N_per_V=real.K_U),
+                   operation=operation, notes=list(real.notes) + notes)
+
+
+def _next_pot(pots: list[Pot], amp_id: str, machine: MachineProfile) -> str:
+    """P1, P2, ... on one machine; on slaved units a pot of the amplifier's own unit while it has
+    one free (U1.P1 ...), else the first unit with a free pot."""
+    if machine.units == 1:
+        return f"P{len(pots) + 1}"
+    per_unit = machine.pot_count // machine.units
+    used = {u: sum(1 for p in pots if p.id.startswith(f"U{u}.")) for u in range(1, machine.units + 1)}
+    own = int(amp_id.split(".")[0][1:])
+    unit = own if used[own] < per_unit else next(u for u in used if used[u] < per_unit)
+    return f"U{unit}.P{used[unit] + 1}"
+
+
+def _signal_name(key: str, have: int | None, by_key: dict[str, _Stage], P: dict[str, int]) -> str:
+    if key.startswith("inv:"):
+        sig = key[4:]
+        return f"{'-' if -P.get(sig, 1) < 0 else ''}{sig}"
+    if key.startswith("pre:"):
+        return f"partial {key[4:]}"
+    pol = P.get(key, 1)
+    return f"{'-' if pol < 0 else ''}{key}"
+
+
+def _pot_note(design: float, used: float) -> str:
+    if design != used:
+        return f"design {design:.3g} is below the dial: set to the minimum"
+    return ""

@@ -1,0 +1,226 @@
+"""Scaling: a design's control law as signal blocks in machine volts.
+
+Every signal on the machine is a voltage ``volts_per_unit * quantity``. Sensors give s, theta,
+s_dot (table A.2). Other signals come from blocks the allocator will put on amplifiers:
+
+- ``sum``:           v = sum_j c_j v_j
+- ``integrate``:     dv/dt = (1/T) sum_j c_j v_j           (T: the machine's time scale)
+- ``differentiate``: (rolloff s + 1) v = T_d s sum_j c_j v_j
+- ``lag``:           (tau s + 1) v = sum_j c_j v_j
+
+The control voltage is the block ``u_c``: u_c = F/K_U = -(1/K_U) K x, so the coefficient on a
+state's voltage is -K_i / (K_sensor_i K_U); conventions.md's wired gain K_i/(K_sensor_i K_U) is
+its negative.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from patchgen.design.lqg import Design
+from patchgen.profiles.machine import MachineProfile
+
+STATE_UNITS = {"s": "m", "theta": "rad", "s_dot": "m/s", "theta_dot": "rad/s", "int_s": "m s",
+               "int_theta": "rad s", "actuator": "N"}
+SENSOR_UNITS = {k: STATE_UNITS[k] for k in ("s", "theta", "s_dot")}
+SENSOR_LABELS = {"s": "cart position pot", "theta": "pendulum angle pot", "s_dot": "motor tachometer"}
+
+
+@dataclass(frozen=True)
+class Term:
+    signal: str
+    coeff: float
+    design: float | None = None  # the design's value when coeff was changed (pot resolution)
+
+    @property
+    def wanted(self) -> float:
+        return self.coeff if self.design is None else self.design
+
+
+@dataclass(frozen=True)
+class Block:
+    name: str  # the signal it produces
+    kind: str  # sum | integrate | differentiate | lag
+    terms: tuple[Term, ...]
+    volts_per_unit: float
+    unit: str
+    purpose: str
+    T_d_s: float | None = None
+    rolloff_s: float | None = None
+    tau_s: float | None = None
+
+
+@dataclass(frozen=True)
+class Realization:
+    """The control law as blocks (in dependency-free order) over the sensor voltages."""
+
+    design_name: str
+    sensors: dict[str, float]  # sensor id -> volts per unit
+    blocks: tuple[Block, ...]
+    K_U: float
+    below_resolution: str
+    notes: tuple[str, ...] = ()
+
+    def block(self, name: str) -> Block:
+        return next(b for b in self.blocks if b.name == name)
+
+
+def realize(design: Design, machine: MachineProfile) -> Realization:
+    """Scale the design's controller into machine volts (gains through sensor constants and K_U)."""
+    spec = design.spec
+    ks = {"s": spec.sensors.s, "theta": spec.sensors.theta, "s_dot": spec.sensors.s_dot}
+    KU = spec.actuator.K_U
+    T = machine.time_scale_s
+    e = spec.estimator.kind
+    blocks: list[Block] = []
+    scale: dict[str, float] = dict(ks)  # volts per unit of each state signal on the machine
+    states = design.states
+    sc = spec.actuator.state_scale
+    if e == "kalman":
+        return _kalman(design, machine, ks, KU, T)
+    if e == "reduced_observer":
+        return _reduced_observer(design, ks, KU, T, max(machine.input_weights) * machine.pot_max)
+    if "theta_dot" in states:
+        if e == "none":
+            raise spec.error("estimator.kind", "theta_dot is not measured on the bench: choose "
+                             "\"differentiator\", \"filtered_differentiator\", \"reduced_observer\" or "
+                             "\"kalman\" to patch this design")
+        roll = design.estimator.rolloff_s
+        scale["theta_dot"] = spec.theta_dot_scale()
+        blocks.append(Block("theta_dot", "differentiate", (Term("theta", 1.0),), scale["theta_dot"], "rad/s",
+                            "theta_dot from theta (practical differentiator)" if e == "differentiator" else
+                            f"theta_dot from theta (differentiator, roll-off {roll:g} s chosen from the noise)",
+                            T_d_s=scale["theta_dot"] / ks["theta"], rolloff_s=roll))
+    ints, int_scale, notes = _integral_blocks(design, ks, T)
+    blocks += ints
+    scale.update(int_scale)
+    if "actuator" in states:
+        # model of the actuator driven by u_c: x_a' = -x_a/tau + u/(tau sc); voltage sc/K_U per unit
+        scale["actuator"] = sc / KU
+        tau = spec.actuator.tau
+        if spec.actuator.model != "lag":
+            raise spec.error("actuator.model", "an actuator state with a zero can only be patched with a "
+                             "Kalman estimator")
+        blocks.append(Block("actuator", "lag", (Term("u_c", 1.0),), scale["actuator"], "N",
+                            "actuator state from a first-order lag model driven by u_c", tau_s=tau))
+    terms = tuple(Term(s, -float(design.K[0, i]) / (scale[s] * KU)) for i, s in enumerate(states))
+    blocks.append(Block("u_c", "sum", terms, 1.0, "V", "control voltage to the servo amplifier"))
+    return Realization(spec.name, ks, tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
+
+
+def _integral_blocks(design: Design, ks: dict[str, float], T: float):
+    """The integral states as integrators of the sensor voltages (gain 1: volts per unit s equal the
+    sensor's), their scales, and a note for each design leak the pure integrator leaves out."""
+    blocks, scale, notes = [], {}, []
+    for name, src in (("int_s", "s"), ("int_theta", "theta")):
+        if name in design.states:
+            scale[name] = ks[src]
+            blocks.append(Block(name, "integrate", (Term(src, T),), ks[src], STATE_UNITS[name], f"integral of {src}"))
+            leak = getattr(design.spec.integrators, f"{name}_leak")
+            if leak:
+                notes.append(f"{name}: the design's leak of {leak:g} 1/s is not patched (a pure integrator)")
+    return blocks, scale, notes
+
+
+def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
+    """Kalman estimator states on integrators: xhat' = A xhat + B u + L (y - C xhat), in volts."""
+    spec = design.spec
+    model = design.model
+    est = model.estimated
+    Ae, Be, Ce = model.submodel(est)
+    L = design.estimator.L
+    sc = spec.actuator.state_scale
+    sv = {"s": ks["s"], "theta": ks["theta"], "s_dot": ks["s_dot"], "theta_dot": spec.theta_dot_scale(),
+          "actuator": sc / KU}
+    S = np.diag([sv[s] for s in est])
+    Sy = np.diag([ks[m] for m in model.measured])
+    Av = S @ (Ae - L @ Ce) @ np.linalg.inv(S)
+    Bv = S @ Be[:, 0] * KU
+    Lv = S @ L @ np.linalg.inv(Sy)
+    blocks: list[Block] = []
+    for i, s in enumerate(est):
+        terms = [Term(f"xhat_{t}", T * Av[i, j]) for j, t in enumerate(est) if Av[i, j] != 0]
+        terms += [Term(m, T * Lv[i, j]) for j, m in enumerate(model.measured) if Lv[i, j] != 0]
+        if Bv[i] != 0:
+            terms.append(Term("u_c", T * Bv[i]))
+        blocks.append(Block(f"xhat_{s}", "integrate", tuple(terms), sv[s], STATE_UNITS[s], f"Kalman estimate of {s}"))
+    scale = {f"xhat_{s}": sv[s] for s in est}
+    ints, int_scale, notes = _integral_blocks(design, ks, T)
+    blocks += ints
+    scale.update(int_scale)
+    sig = {s: (f"xhat_{s}" if s in est else s) for s in model.states}
+    terms = tuple(Term(sig[s], -float(design.K[0, i]) / (scale[sig[s]] * KU)) for i, s in enumerate(model.states))
+    blocks.append(Block("u_c", "sum", terms, 1.0, "V", "control voltage to the servo amplifier"))
+    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
+
+
+def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
+                      top: float) -> Realization:
+    """Reduced observer (patchgen.design.observer) on lag amplifiers: z_i' = -p z_i + sum F_ij z_j + G_i y
+    + H_i u, each a lag of time constant 1/p (its own feedback needs no pot).
+
+    Scaling: each z's voltage is scaled so its largest input coefficient is exactly ``top`` (the
+    largest a weighted input gives without a pot; the biggest voltage the inputs allow). The
+    observer gain Lr is folded into the u_c summer's sensor terms (w_hat = z + Lr y) unless a
+    folded coefficient would exceed ``top``; then w_hat gets its own summer, scaled so its input
+    and output coefficients are balanced (geometric mean)."""
+    spec = design.spec
+    model = design.model
+    obs = design.estimator.observer
+    w = list(obs.unmeasured)
+    y = list(model.measured)
+    tau = 1.0 / obs.pole
+    alpha: dict[str, float] = {}
+    for i in reversed(range(len(w))):
+        rates = [abs(obs.F[i, j]) / alpha[w[j]] for j in range(i + 1, len(w))]
+        rates += [abs(obs.G[i, k]) / ks[m] for k, m in enumerate(y)]
+        rates.append(abs(obs.H[i]) * KU)
+        alpha[w[i]] = top / (tau * max(rates))
+    blocks: list[Block] = []
+    for i, s in enumerate(w):
+        terms: list[Term] = []
+        for j in range(i + 1, len(w)):
+            if obs.F[i, j] != 0:
+                terms.append(Term(f"z_{w[j]}", _exact(tau * obs.F[i, j] * alpha[s] / alpha[w[j]], top)))
+        for k, m in enumerate(y):
+            if obs.G[i, k] != 0:
+                terms.append(Term(m, _exact(tau * obs.G[i, k] * alpha[s] / ks[m], top)))
+        if obs.H[i] != 0:
+            terms.append(Term("u_c", _exact(tau * obs.H[i] * alpha[s] * KU, top)))
+        blocks.append(Block(f"z_{s}", "lag", tuple(terms), alpha[s], STATE_UNITS[s],
+                            f"reduced observer: {s} estimate minus its sensor part (pole {obs.pole:g} rad/s)",
+                            tau_s=tau))
+    scale = {f"z_{s}": alpha[s] for s in w}
+    ints, int_scale, notes = _integral_blocks(design, ks, T)
+    blocks += ints
+    scale.update(int_scale)
+    Ky = design.K[0, [model.index(m) for m in y]]
+    Kw = design.K[0, [model.index(s) for s in w]]
+    folded = Ky + Kw @ obs.Lr
+    fold = [s for i, s in enumerate(w)
+            if all(abs(folded[k]) / (ks[m] * KU) <= top for k, m in enumerate(y))]
+    ysum = Ky + sum((Kw[i] * obs.Lr[i] for i, s in enumerate(w) if s in fold), np.zeros(len(y)))
+    uterms = [Term(m, -float(ysum[k]) / (ks[m] * KU)) for k, m in enumerate(y)]
+    for i, s in enumerate(w):
+        if s in fold:
+            uterms.append(Term(f"z_{s}", -float(Kw[i]) / (alpha[s] * KU)))
+            continue
+        # w_hat = z + Lr y on its own summer, scale beta: inputs beta/alpha, Lr beta/k; out K/(beta K_U)
+        ins = max([1.0 / alpha[s]] + [abs(obs.Lr[i, k]) / ks[m] for k, m in enumerate(y)])
+        beta = math.sqrt(abs(Kw[i]) / (KU * ins))
+        hterms = [Term(f"z_{s}", beta / alpha[s])]
+        hterms += [Term(m, float(obs.Lr[i, k]) * beta / ks[m]) for k, m in enumerate(y) if obs.Lr[i, k] != 0]
+        blocks.append(Block(f"what_{s}", "sum", tuple(hterms), beta, STATE_UNITS[s],
+                            f"reduced observer's estimate of {s} (z plus its sensor part)"))
+        uterms.append(Term(f"what_{s}", -float(Kw[i]) / (beta * KU)))
+    uterms += [Term(n, -design.gain(n) / (scale[n] * KU)) for n in model.states if n.startswith("int_")]
+    blocks.append(Block("u_c", "sum", tuple(uterms), 1.0, "V", "control voltage to the servo amplifier"))
+    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
+
+
+def _exact(c: float, top: float) -> float:
+    """A coefficient the scaling made +/-top, exactly (so the allocator patches it without a pot)."""
+    return math.copysign(top, c) if math.isclose(abs(c), top, rel_tol=1e-9) else c

@@ -1,0 +1,1 @@
+"""The cart-pendulum plant: parameters, nonlinear and linear equations, one integration step."""

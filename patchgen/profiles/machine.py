@@ -1,0 +1,109 @@
+"""Machine profiles: the analog computer's amplifiers, pots, weights and imperfections, as data."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field
+
+from patchgen.inputs.errors import InputError
+from patchgen.inputs.fields import InputModel, Int, Real, bounded
+from patchgen.inputs.validation import load_profile
+
+Role = Literal["integrator", "summer", "inverter", "differentiator"]
+MAX_UNITS = 16  # slaved machines in one profile
+
+
+class AmplifierSlot(InputModel):
+    """One physical amplifier on the panel and what it can be patched as."""
+
+    id: str = Field(min_length=1)
+    roles: list[Role] = Field(min_length=1)
+    inputs: dict[str, Annotated[Int, Field(ge=0, le=100)]] = Field(
+        description="count of inputs per weight, keys 'x1', 'x10'")
+
+    def input_count(self, weight: int) -> int:
+        return self.inputs.get(f"x{weight}", 0)
+
+
+OHM = (1.0, 1e12)
+FARAD = (1e-15, 1.0)
+
+
+class Components(InputModel):
+    """Passive parts behind the panel (for the SPICE export)."""
+
+    input_resistor_x1_ohm: Real = bounded(*OHM)
+    input_resistor_x10_ohm: Real = bounded(*OHM)
+    feedback_resistor_ohm: Real = bounded(*OHM)
+    integrator_capacitor_F: Real = bounded(*FARAD)
+    pot_resistance_ohm: Real = bounded(*OHM)
+    differentiator_capacitor_F: Real = bounded(*FARAD)
+    opamp_open_loop_gain: Real = bounded(1, 1e12, open_lo=True)
+    opamp_output_resistance_ohm: Real = bounded(0, 1e6)
+
+
+class Imperfections(InputModel):
+    """What makes the real machine differ from ideal elements (for the simulators)."""
+
+    integrator_offset_V: Real = bounded(0, 1)
+    integrator_bias_A: Real = bounded(0, 1e-3)
+    saturation_V: Real = bounded(0, 1000, open_lo=True)
+    amplifier_noise_V_rms: Real = bounded(0, 10)
+    noise_bandwidth_Hz: Real = bounded(1e-3, 1e9)
+    differentiator_rolloff_s: Real = bounded(1e-4, 1)
+
+
+class MachineProfile(InputModel):
+    """A whole machine: read from patchgen/profiles/machines/<id>.toml or a user path."""
+
+    id: str = Field(min_length=1)
+    name: str
+    reference_V: Real = bounded(0, 1000, open_lo=True)
+    time_scale_s: Real = bounded(1e-6, 1e6)
+    pot_count: Int = bounded(0, 1000)
+    pot_resolution: Real = bounded(1e-9, 0.5)
+    pot_max: Real = bounded(0, 100, open_lo=True)
+    input_weights: list[Annotated[Int, Field(ge=1, le=1000)]] = Field(min_length=1, max_length=10)
+    ic_mode: str
+    pot_set_mode: str
+    overload_indicator: bool
+    max_units: Int = bounded(1, MAX_UNITS)
+    units: Int = bounded(1, MAX_UNITS, default=1,
+                         description="machines slaved together in this profile (see slaved())")
+    amplifiers: list[AmplifierSlot] = Field(min_length=1, max_length=1000)
+    components: Components
+    imperfections: Imperfections
+
+    def slaved(self, units: int) -> MachineProfile:
+        """``units`` machines slaved together as one: amplifiers U1.A1 ... U2.A8, pots times units."""
+        if units == 1:
+            return self
+        amps = [a.model_copy(update={"id": f"U{u}.{a.id}"}) for u in range(1, units + 1) for a in self.amplifiers]
+        return self.model_copy(update={"amplifiers": amps, "pot_count": self.pot_count * units, "units": units,
+                                       "name": f"{self.name} x{units} (slaved)"})
+
+    def integrator_drift_V_per_s(self) -> float:
+        """Drift rate of an integrator with no input: e_os/(R C) + i_b/C (gp6.md)."""
+        c = self.components
+        return (self.imperfections.integrator_offset_V / (c.input_resistor_x1_ohm * c.integrator_capacitor_F)
+                + self.imperfections.integrator_bias_A / c.integrator_capacitor_F)
+
+
+def load_machine(name_or_path: str, source: str = "", field: str = "machine") -> MachineProfile:
+    """Load a shipped profile by id (e.g. 'gp6') or a profile file by path."""
+    return load_profile(MachineProfile, name_or_path, "machine", source, field, check=_check_amplifiers)
+
+
+def _check_amplifiers(profile: MachineProfile, source: str) -> None:
+    """Amplifier ids are unique and their input keys name the profile's weights."""
+    keys = {f"x{w}" for w in profile.input_weights}
+    seen: set[str] = set()
+    for i, a in enumerate(profile.amplifiers):
+        if a.id in seen:
+            raise InputError(source, f"amplifiers[{i}].id", f"{a.id!r} is used twice")
+        seen.add(a.id)
+        for k in a.inputs:
+            if k not in keys:
+                raise InputError(source, f"amplifiers[{i}].inputs.{k}",
+                                 f"not an input weight of this machine (input_weights give {', '.join(sorted(keys))})")

@@ -1,0 +1,43 @@
+"""The pot-setting table: CSV for files, a rich table for the terminal."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+from rich.table import Table
+
+from patchgen.patch.netlist import Netlist
+
+COLUMNS = ("pot", "setting", "signal", "amplifier", "input", "weight", "coefficient", "realized", "error_pct", "note")
+
+
+def pot_rows(net: Netlist) -> list[dict]:
+    rows = []
+    for p in net.pots:
+        err = p.error
+        rows.append({"pot": p.id, "setting": f"{p.setting:.3f}", "signal": p.signal, "amplifier": p.amplifier,
+                     "input": p.jack, "weight": p.weight, "coefficient": f"{p.coefficient:.6g}",
+                     "realized": f"{p.realized:.6g}",
+                     "error_pct": "inf" if err == float("inf") else f"{100 * err:+.3f}", "note": p.note})
+    return rows
+
+
+def pots_csv(net: Netlist) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
+    w.writeheader()
+    w.writerows(pot_rows(net))
+    return buf.getvalue()
+
+
+def pot_table(net: Netlist) -> Table:
+    t = Table(title=f"Pot settings for {net.design} on the {net.machine_name} (set in POT SET, load connected)",
+              title_justify="left")
+    for c, j in (("pot", "left"), ("setting", "right"), ("signal", "left"), ("into", "left"),
+                 ("coefficient", "right"), ("realised", "right"), ("error", "right")):
+        t.add_column(c, justify=j)
+    for r in pot_rows(net):
+        t.add_row(r["pot"], r["setting"], r["signal"], f"{r['amplifier']} {r['input']} (x{r['weight']})",
+                  r["coefficient"], r["realized"], r["error_pct"] + " %" if r["error_pct"] != "inf" else "n/a")
+    return t

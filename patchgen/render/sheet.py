@@ -1,0 +1,268 @@
+"""The patch sheet: what a lab needs to wire, set and run a patch, as HTML and Markdown.
+
+Rendered from the templates shipped in the package (patchgen/templates, jinja2). The HTML sheet is
+printable on A4 and on Letter alike: its page is the area common to both (210 mm x 279 mm) with
+margins, so nothing is wider than 186 mm or taller than 250 mm. Everything shown is computed from
+the netlist and the design summary, so the same inputs give the same bytes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import jinja2
+
+from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
+from patchgen.render.diagram import dial_decimals, quantity_label, signed_label
+
+
+@dataclass(frozen=True)
+class SheetSection:
+    """An extra table on the sheet (e.g. 'Predicted on the bench', 'Why this patch')."""
+
+    title: str
+    header: list[str]
+    rows: list[list[str]]
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class SheetSummary:
+    """The design as the sheet summarises it.
+
+    ``margins`` maps a loop name (e.g. 'plant input') to its figures by name, already chosen by
+    the design stage (e.g. {'lower GM': '0.2757 (-11.19 dB)', 'PM': 79.12}).
+    """
+
+    design: str
+    description: str
+    states: list[str]
+    K: list[float]
+    poles: list[complex]
+    margins: dict[str, dict[str, float | str]]
+    estimator: str
+    sections: list[SheetSection] = field(default_factory=list)
+
+
+def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str) -> tuple[str, str]:
+    """The patch sheet as (HTML, Markdown); ``svg`` is the wiring diagram, inlined in the HTML."""
+    ctx = sheet_context(netlist, summary)
+    html = _env(autoescape=True).get_template("patch-sheet.html.j2").render(
+        **ctx, svg=_inline_svg(svg))
+    md = _env(autoescape=False).get_template("patch-sheet.md.j2").render(**ctx)
+    return _end(html), _end(md)
+
+
+def sheet_context(net: Netlist, summary: SheetSummary) -> dict:
+    """Every value the templates show, as plain strings and lists."""
+    decimals = dial_decimals(net.pot_resolution)
+    amps = {a.id: a for a in net.amplifiers}
+    sensors = {s.id: s for s in net.sensors}
+
+    def source_name(src: str) -> str:
+        if src in sensors:
+            return f"{quantity_label(sensors[src].quantity)} ({src} sensor)"
+        a = amps[src]
+        return f"{src} ({signed_label(a.carries.polarity, a.carries.quantity)})"
+
+    pots = [{
+        "id": p.id,
+        "setting": f"{p.setting:.{decimals}f}",
+        "signal": p.signal,
+        "source": source_name(p.source),
+        "input": f"{p.amplifier} {p.jack}",
+        "weight": f"x{p.weight}",
+        "realized": _signed(p.realized, 4),
+        "design": _signed(p.coefficient, 4),
+        "error": _error(p),
+        "note": p.note,
+    } for p in net.pots]
+
+    amplifiers = [{
+        "id": a.id,
+        "role": a.role,
+        "carries": _carries(a),
+        "inputs": [_input_text(inp, source_name) for inp in a.inputs],
+        "settings": _amp_settings(a),
+        "purpose": a.purpose,
+    } for a in net.amplifiers]
+
+    wires = [{"n": i + 1, "from": f, "to": t} for i, (f, t) in enumerate(wire_list(net))]
+
+    ics = [{"id": a.id, "role": a.role,
+            "ic": "0 V" if a.ic_V is None else f"{a.ic_V:g} V",
+            "carries": _carries(a)}
+           for a in net.amplifiers if a.role in ("integrator", "lag")]
+
+    sign_checks = []
+    for p in net.pots:
+        sign = _path_sign(net, p.amplifier)
+        if sign is None:
+            continue
+        if p.source in sensors:
+            moved, pol = quantity_label(sensors[p.source].quantity), 1
+        else:
+            carried = amps[p.source].carries
+            moved, pol = quantity_label(carried.quantity), carried.polarity
+        sign_checks.append({"pot": p.id, "moved": moved, "through": p.source,
+                            "u_c": "+" if sign * pol > 0 else "−"})
+
+    states = [{"state": quantity_label(s), "name": s, "K": _minus(f"{k:.6g}")}
+              for s, k in zip(summary.states, summary.K)]
+    margins = [{"loop": loop, "figures": [(name, _fmt(v)) for name, v in figs.items()]}
+               for loop, figs in summary.margins.items()]
+
+    # the diagram gets the room the extra sections leave on two printed pages
+    diagram_mm = 96 if len(summary.sections) <= 1 else 68
+    return {
+        "diagram_mm": diagram_mm,
+        "net": net,
+        "summary": summary,
+        "title": f"Patch sheet: {summary.design or net.design}",
+        "states": states,
+        "poles": [_complex(p) for p in summary.poles],
+        "margins": margins,
+        "pots": pots,
+        "amplifiers": amplifiers,
+        "wires": wires,
+        "operation": list(net.operation),
+        "ics": ics,
+        "sign_checks": sign_checks,
+        "checklist": _checklist(net, bool(ics), bool(sign_checks)),
+        "notes": list(net.notes),
+        "sections": summary.sections,
+        "resolution": f"{net.pot_resolution:g}",
+        "output_amp": net.output.source,
+    }
+
+
+def _checklist(net: Netlist, has_ics: bool, has_signs: bool) -> list[str]:
+    items = [
+        "Servo amplifier powered off; the cart held at the centre of the track.",
+        f"Patch every cord of the wire list, ticking each one ({net.machine_name}"
+        + (f", {net.units} units slaved together" if net.units > 1 else "") + ").",
+        "Set every pot in POT SET mode with its load connected (the amplifier input patched): "
+        f"the dial then reads the loaded coefficient; set it to the table's value to "
+        f"{net.pot_resolution:g}.",
+    ]
+    if has_ics:
+        items.append("Zero the integrators: IC mode with each IC jack at the value listed, check "
+                     "each integrator output reads minus its IC-jack voltage, then back to IC.")
+    items.append(f"In OP, watch the overload lamps: any lamp means an amplifier has left "
+                 f"±{net.reference_V:g} V; stop and recheck the patch.")
+    if has_signs:
+        items.append("Check each sign with one feedback path at a time (all other pots at 0): "
+                     "move the quantity by hand and check that u_c moves the way the sign table "
+                     "says.")
+    else:
+        items.append("Check each sign with one feedback path at a time (all other pots at 0).")
+    items.append("Restore every pot to its setting, pendulum held upright, then power the servo "
+                 "amplifier last; keep a hand on its power switch.")
+    return items
+
+
+def _path_sign(net: Netlist, amp_id: str) -> int | None:
+    """Sign of u_c per volt entering ``amp_id``: one inversion per amplifier to the output.
+
+    None when the amplifier reaches the output by no path or by more than one.
+    """
+    feeds: dict[str, list[str]] = {}
+    for a in net.amplifiers:
+        for inp in a.inputs:
+            feeds.setdefault(inp.source, []).append(a.id)
+    paths: list[int] = []
+
+    def walk(node: str, depth: int, seen: frozenset[str]) -> None:
+        if len(paths) > 1:
+            return
+        if node == net.output.source:
+            paths.append(depth)
+            return
+        for nxt in feeds.get(node, []):
+            if nxt not in seen:
+                walk(nxt, depth + 1, seen | {nxt})
+
+    walk(amp_id, 1, frozenset({amp_id}))
+    if len(paths) != 1:
+        return None
+    return -1 if paths[0] % 2 else 1
+
+
+def _carries(a: Amplifier) -> str:
+    c = a.carries
+    label = signed_label(c.polarity, c.quantity)
+    if c.unit == "V" and c.volts_per_unit == 1.0:
+        return label
+    return f"{label} ({c.volts_per_unit:g} V per {c.unit})" if c.unit else label
+
+
+def _input_text(inp, source_name) -> str:
+    via = f" via {inp.pot}" if inp.pot else ""
+    return f"{inp.jack} (x{inp.weight}) ← {source_name(inp.source)}{via}"
+
+
+def _amp_settings(a: Amplifier) -> str:
+    parts = []
+    if a.ic_V is not None:
+        parts.append(f"IC {a.ic_V:g} V")
+    if a.T_d_s is not None:
+        parts.append(f"T_d {a.T_d_s:g} s")
+    if a.rolloff_s is not None:
+        parts.append(f"roll-off {a.rolloff_s:g} s")
+    if a.tau_s is not None:
+        parts.append(f"tau {a.tau_s:g} s")
+    return ", ".join(parts)
+
+
+def _error(p: Pot) -> str:
+    e = p.error
+    if math.isinf(e):
+        return "n/a"
+    if abs(e) < 1.0:
+        return _minus(f"{100 * e:+.2f} %")
+    return _minus(f"{100 * e:+.3g} %")
+
+
+def _signed(x: float, digits: int) -> str:
+    return _minus(f"{x:+.{digits}g}")
+
+
+def _minus(text: str) -> str:
+    """Typographic minus signs."""
+    return text.replace("-", "−")
+
+
+def _complex(z: complex) -> str:
+    z = complex(z)
+    if abs(z.imag) < 1e-12:
+        return _minus(f"{z.real:.4g}")
+    sign = "+" if z.imag > 0 else "−"
+    return _minus(f"{z.real:.4g}") + f" {sign} {abs(z.imag):.4g}j"
+
+
+def _fmt(v: float | str) -> str:
+    return v if isinstance(v, str) else _minus(f"{v:.4g}")
+
+
+def _inline_svg(svg: str) -> str:
+    """The SVG without an XML declaration, scaled to the sheet's width."""
+    body = svg.strip()
+    if body.startswith("<?xml"):
+        body = body[body.index("?>") + 2:].lstrip()
+    return body.replace("<svg ", '<svg class="wiring" role="img" aria-label="wiring diagram" ', 1)
+
+
+def _env(autoescape: bool) -> jinja2.Environment:
+    return jinja2.Environment(
+        loader=jinja2.PackageLoader("patchgen", "templates"),
+        autoescape=autoescape,
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+    )
+
+
+def _end(text: str) -> str:
+    return text if text.endswith("\n") else text + "\n"

@@ -1,0 +1,1 @@
+"""Studies over many patches: recommend a patch, sweep the plant's parameters."""

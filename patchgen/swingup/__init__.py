@@ -1,0 +1,1 @@
+"""Pump-up from hanging (thesis chapter 3), the hand-off zone and the whole manoeuvre."""

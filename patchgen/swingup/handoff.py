@@ -1,0 +1,183 @@
+"""The hand-off zone: the region of state space where the linear controller takes over (thesis 3.5).
+
+The thesis asks for a "zone of control" in which the linear controller is effective, judged by a
+cost on the non-homogeneous states. Here the zone is a level set of a quadratic form
+``x^T P x < r`` (optionally intersected with a box), with the angle wrapped to (-pi, pi] so that
+"upright" is the same after any number of turns. ``r`` is estimated by sampling: the largest level
+containing no sampled start from which the controller fails to recover.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import solve_continuous_lyapunov
+
+from patchgen.plant.equations import PlantParams, linear_matrices
+from patchgen.plant.step import rk4_step
+
+STATE_COUNT = 4
+
+
+def wrap_angle(theta: np.ndarray | float) -> np.ndarray | float:
+    """Angle wrapped to [-pi, pi): 0 is upright after any number of turns."""
+    return (np.asarray(theta) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def wrapped(x: np.ndarray) -> np.ndarray:
+    """The state (4 or 4xN) with its angle wrapped about upright."""
+    y = np.array(x, dtype=float, copy=True)
+    y[1] = wrap_angle(y[1])
+    return y
+
+
+@dataclass(frozen=True)
+class Zone:
+    """Hand-off zone: ``x^T P x < r`` (angle wrapped), and inside ``half_widths`` if given."""
+
+    P: np.ndarray
+    r: float
+    half_widths: tuple[float, float, float, float] | None = None
+    source: str = ""
+    samples: int = 0
+    failures: int = 0
+
+    def value(self, x: np.ndarray) -> np.ndarray | float:
+        """The quadratic form for a state (4,) or a batch (4, N)."""
+        y = wrapped(x)
+        if y.ndim == 1:
+            return float(y @ self.P @ y)
+        return np.einsum("in,ij,jn->n", y, self.P, y)
+
+    def contains(self, x: np.ndarray) -> bool | np.ndarray:
+        inside = np.asarray(self.value(x)) < self.r
+        if self.half_widths is not None:
+            y = wrapped(x)
+            h = np.asarray(self.half_widths, dtype=float)
+            box = np.all(np.abs(y) < (h if y.ndim == 1 else h[:, None]), axis=0)
+            inside = inside & box
+        return bool(inside) if np.ndim(inside) == 0 else inside
+
+    @staticmethod
+    def box(half_widths: tuple[float, float, float, float], source: str = "box") -> Zone:
+        """A zone given by bounds only (e.g. |theta| < 10 deg and the rest)."""
+        h = np.asarray(half_widths, dtype=float)
+        return Zone(P=np.diag(1.0 / h**2), r=float(STATE_COUNT), half_widths=tuple(map(float, h)),
+                    source=source)
+
+
+def lyapunov_matrix(
+    plant: PlantParams, K: np.ndarray, force_limit: float, weights: np.ndarray | None = None
+) -> np.ndarray:
+    """P with (A-BK)^T P + P (A-BK) = -(Q_L + K^T K / F_max^2): the closed loop's cost-to-go for
+    states weighted by Q_L = diag(weights) (default 1/spread^2) and force by the force limit,
+    so that directions that saturate the actuator count as far from upright."""
+    A, B = linear_matrices(plant)
+    k = np.asarray(K, dtype=float).ravel()[:STATE_COUNT]
+    Acl = A - B @ k[None, :]
+    w = default_spread(plant) ** -2.0 if weights is None else np.asarray(weights, dtype=float)
+    P = solve_continuous_lyapunov(Acl.T, -(np.diag(w) + np.outer(k, k) / force_limit**2))
+    return 0.5 * (P + P.T)
+
+
+def default_spread(plant: PlantParams) -> np.ndarray:
+    """Half-widths of the sampling box: half the track, 0.5 rad, and the speeds these imply."""
+    half_track = plant.d / 2.0
+    omega = np.sqrt(plant.g / plant.l)
+    theta = 0.5
+    return np.array([half_track, theta, half_track * omega, theta * omega])
+
+
+def estimate_zone(
+    controller_recovers: Callable[[np.ndarray], bool],
+    P: np.ndarray,
+    spread: np.ndarray,
+    *,
+    n_samples: int = 300,
+    seed: int = 0,
+    shrink: float = 0.9,
+    source: str = "sampled",
+) -> Zone:
+    """Estimate r for ``x^T P x < r``: sample starts in the box +/-spread, try them in order of
+    increasing x^T P x, and stop at the first one the controller does not recover from. The zone
+    is also cut to the sampled box: nothing outside it was tried."""
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(-1.0, 1.0, size=(STATE_COUNT, n_samples)) * np.asarray(spread, dtype=float)[:, None]
+    V = np.einsum("in,ij,jn->n", X, P, X)
+    box = tuple(float(h) for h in spread)
+    order = np.argsort(V)
+    tried = 0
+    for k in order:
+        tried += 1
+        if not controller_recovers(X[:, k]):
+            return Zone(P=P, r=float(shrink * V[k]), half_widths=box, source=source, samples=tried,
+                        failures=1)
+    return Zone(P=P, r=float(V[order[-1]]), half_widths=box, source=source, samples=tried, failures=0)
+
+
+def zone_from_batch(
+    recovered: np.ndarray, X: np.ndarray, P: np.ndarray, *, shrink: float = 0.9, source: str = "sampled"
+) -> Zone:
+    """The zone from a batch already simulated: r below the smallest level of a failing start."""
+    V = np.einsum("in,ij,jn->n", X, P, X)
+    fails = V[~recovered]
+    r = float(shrink * fails.min()) if fails.size else float(V.max())
+    half_widths = tuple(float(h) for h in np.max(np.abs(X), axis=1))
+    return Zone(P=P, r=r, half_widths=half_widths, source=source, samples=int(X.shape[1]),
+                failures=int(fails.size))
+
+
+@dataclass(frozen=True)
+class RecoveryTest:
+    """What "recovers" means: the cart stays on the track and the state settles within tolerances."""
+
+    horizon_s: float = 6.0
+    dt_s: float = 2e-3
+    settle: tuple[float, float, float, float] = (0.05, 0.01, 0.05, 0.05)
+
+
+def state_feedback_recovers_batch(
+    plant: PlantParams,
+    K: np.ndarray,
+    force_limit: float,
+    X0: np.ndarray,
+    test: RecoveryTest = RecoveryTest(),
+) -> np.ndarray:
+    """Simulate u = sat(-K x) (angle wrapped) from each column of X0 on the nonlinear plant (RK4)."""
+    k = np.asarray(K, dtype=float).ravel()[:STATE_COUNT]
+    x = np.array(X0, dtype=float, copy=True)
+    h = test.dt_s
+    half_track = plant.d / 2.0
+    on_track = np.ones(x.shape[1], dtype=bool)
+
+    def force(y: np.ndarray) -> np.ndarray:
+        return np.clip(-(k @ wrapped(y)), -force_limit, force_limit)
+
+    for _ in range(int(round(test.horizon_s / h))):
+        x = rk4_step(plant, x, force(x), h)
+        on_track &= np.abs(x[0]) < half_track
+    settled = np.all(np.abs(wrapped(x)) < np.asarray(test.settle)[:, None], axis=0)
+    return on_track & settled
+
+
+def lqr_zone(
+    plant: PlantParams,
+    K: np.ndarray,
+    force_limit: float,
+    *,
+    P: np.ndarray | None = None,
+    n_samples: int = 2000,
+    seed: int = 0,
+    shrink: float = 0.9,
+    test: RecoveryTest = RecoveryTest(),
+) -> Zone:
+    """Default zone from a linear design: a Lyapunov level set of A-BK, its level found by
+    simulating u = -K x (force-limited) on the nonlinear plant from sampled starts."""
+    P = lyapunov_matrix(plant, K, force_limit) if P is None else np.asarray(P, dtype=float)
+    rng = np.random.default_rng(seed)
+    spread = default_spread(plant)
+    X = rng.uniform(-1.0, 1.0, size=(STATE_COUNT, n_samples)) * spread[:, None]
+    ok = state_feedback_recovers_batch(plant, K, force_limit, X, test)
+    return zone_from_batch(ok, X, P, shrink=shrink, source="lqr-lyapunov")

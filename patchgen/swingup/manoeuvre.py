@@ -1,0 +1,117 @@
+"""The whole manoeuvre: pump up from hanging, hand off to the *patched* controller, hold on the bench.
+
+The pump-up runs on the nonlinear plant (patchgen.swingup.strategies); when the state enters the hand-off
+zone the patched circuit (simulated from its netlist with the bench actuator, noise and drift)
+takes over from that state, its integrators released from zero (IC -> OP at hand-off).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from patchgen.bench.simulate import SimResult, simulate
+from patchgen.inputs.scenario import InitialState, Scenario
+from patchgen.patch.netlist import Netlist
+from patchgen.plant.equations import PlantParams
+from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
+from patchgen.swingup.handoff import Zone, default_spread, estimate_zone, lyapunov_matrix, wrap_angle
+from patchgen.swingup.run import optimised_schedule, swing_up
+from patchgen.swingup.schedule import SensitivityRow, schedule_sensitivity
+from patchgen.swingup.strategies import SwingUpResult
+
+RECOVERY_S = 5.0  # a start counts as recovered if the patch holds it this long and brings theta home
+HOME_DEG = 3.0
+
+
+@dataclass
+class Manoeuvre:
+    pump: SwingUpResult
+    hold: SimResult | None
+    hold_s: float
+    zone: Zone | None = None
+    sensitivity: list[SensitivityRow] | None = None  # the open-loop schedule on plants off by 10%
+
+    @property
+    def held(self) -> bool:
+        return self.hold is not None and self.hold.runs[0].held
+
+
+def _start(x: np.ndarray, duration: float, seed: int, name: str) -> Scenario:
+    return Scenario(name=name, description=f"{duration:g} s from a hand-off state", duration_s=duration, seed=seed,
+                    initial=InitialState(s=float(x[0]), theta=float(wrap_angle(x[1])), s_dot=float(x[2]),
+                                         theta_dot=float(x[3])))
+
+
+def patched_zone(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, K4: np.ndarray,
+                 force_limit: float, n_samples: int = 300, seed: int = 0) -> Zone:
+    """The zone of control of the patched controller on the bench: a level set of the linear
+    design's closed-loop cost (P), its level found by simulating the patched circuit (bench
+    actuator, noise and drift) from sampled starts and stopping at the first it does not recover."""
+    P = lyapunov_matrix(plant, K4, force_limit)
+
+    def recovers(x: np.ndarray) -> bool:
+        r = simulate(net, plant, bench, machine, _start(x, RECOVERY_S, seed, "zone-probe"), keep_history=False)
+        run = r.runs[0]
+        return run.held and abs(np.degrees(wrap_angle(run.final_state[1]))) < HOME_DEG
+
+    return estimate_zone(recovers, P, default_spread(plant), n_samples=n_samples, seed=seed,
+                         source="patched controller on the bench")
+
+
+def manoeuvre(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, K4: np.ndarray,
+              strategy: str, force_limit: float, hold_s: float = 30.0, seed: int = 0,
+              ideal: bool = False) -> Manoeuvre:
+    """Pump up with ``strategy`` until the state enters the patched controller's zone, then hold
+    with the patched controller for ``hold_s`` seconds on the bench."""
+    zone = patched_zone(net, plant, bench, machine, K4, force_limit, seed=seed)
+    sensitivity = None
+    if strategy == "schedule":
+        sched = optimised_schedule(plant, force_limit, zone)
+        pump = swing_up(plant, force_limit, strategy, K4, zone, schedule=sched, hold_s=0.0)
+        sensitivity = schedule_sensitivity(plant, sched.schedule, zone, force_limit)
+    else:
+        pump = swing_up(plant, force_limit, strategy, K4, zone, hold_s=0.0)
+    if not pump.reached:
+        return Manoeuvre(pump, None, hold_s, zone, sensitivity)
+    sc = _start(pump.handoff_state, hold_s, seed, "hold-after-pump-up")
+    return Manoeuvre(pump, simulate(net, plant, bench, machine, sc, ideal=ideal), hold_s, zone, sensitivity)
+
+
+def plot_manoeuvre(m: Manoeuvre, stem: Path, title: str, svg: bool = False) -> list[Path]:
+    """s, theta and force over the whole manoeuvre, the hand-off marked (PNG, and a deterministic
+    SVG with ``svg``)."""
+    from patchgen.render import plotting
+
+    p = m.pump
+    t0 = p.handoff_time if p.reached else p.t[-1]
+    keep = p.t <= t0
+    fig, ax = plotting.stacked(8, 7, 3)
+    cols = plotting.columns(fig)
+    env = lambda t, y: plotting.envelope(t, y, cols)
+    ax[0].plot(*env(p.t[keep], p.x[keep, 0]), color="C0", label="pump-up")
+    ax[1].plot(*env(p.t[keep], np.degrees(p.x[keep, 1])), color="C0")
+    ax[2].plot(*env(p.t[keep], p.u[keep]), color="C0")
+    if m.hold is not None:
+        h = m.hold.history
+        t = h["t"] + t0
+        turns = 2 * np.pi * np.round((p.handoff_state[1] - wrap_angle(p.handoff_state[1])) / (2 * np.pi))
+        ax[0].plot(*env(t, h["s"]), color="C1", label="patched controller (bench)")
+        ax[1].plot(*env(t, np.degrees(h["theta"] + turns)), color="C1")
+        ax[2].plot(*env(t, h["force"]), color="C1")
+    half = p.plant.d / 2
+    for a in ax:
+        a.axvline(t0, color="k", lw=0.6, ls=":")
+        a.grid(alpha=0.3)
+    for v in (-half, half):
+        ax[0].axhline(v, color="r", lw=0.6, ls="--")
+    ax[0].set_ylabel("s (m)")
+    ax[1].set_ylabel("theta (deg, 0 or 360 upright)")
+    ax[2].set_ylabel("force (N)")
+    ax[2].set_xlabel("t (s)")
+    ax[0].legend(loc="upper right", fontsize=8)
+    ax[0].set_title(title, fontsize=10)
+    return plotting.save(fig, stem.with_suffix(".png"), stem.with_suffix(".svg") if svg else None)

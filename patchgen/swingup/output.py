@@ -1,0 +1,126 @@
+"""Files from a pump-up run: histories CSV, switching table (CSV, Markdown), plot (PNG; SVG on request).
+
+Outputs are deterministic: fixed number formats, and the SVG has a fixed hash salt and no date.
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from patchgen.swingup.handoff import wrap_angle
+from patchgen.swingup.strategies import SwingUpResult, pendulum_energy, upright_energy
+
+TABLE_COLUMNS = ("series", "phase", "phase_name", "force_N", "time_s", "reason")
+
+
+def _fmt(v) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, (float, np.floating)):
+        return f"{float(v):.6g}"
+    return str(v)
+
+
+def patch_sheet_rows(result: SwingUpResult) -> list[list[str]]:
+    """The switching table for the patch sheet: header row, then series/phase/force/time rows."""
+    rows = [["Series", "Phase", "Force (N)", "Time (s)"]]
+    for r in result.table_rows():
+        if r["phase"] is None:
+            rows.append(["hand-off to linear controller", "", "", f"{r['time_s']:.3f}"])
+        else:
+            rows.append([str(r["series"]), f"{r['phase']} ({r['phase_name']})", f"{r['force_N']:+.1f}",
+                         f"{r['time_s']:.3f}"])
+    return rows
+
+
+def compact_schedule_rows(result: SwingUpResult) -> tuple[list[str], list[list[str]]]:
+    """The switching table one series a row (push force and the three switch times), for the sheet."""
+    header = ["series", "push (N)", "push at (s)", "reverse at (s)", "coast at (s)"]
+    series: dict[int, dict[int, dict]] = {}
+    rows: list[list[str]] = []
+    for r in result.table_rows():
+        if r["phase"] is None:
+            continue
+        series.setdefault(r["series"], {})[r["phase"]] = r
+    for k in sorted(series):
+        ph = series[k]
+        push = ph.get(1)
+        rows.append([str(k), "" if push is None else f"{push['force_N']:+.1f}",
+                     *("" if ph.get(i) is None else f"{ph[i]['time_s']:.3f}" for i in (1, 2, 3))])
+    if result.handoff_time is not None:
+        rows.append(["hand-off", "", f"{result.handoff_time:.3f}", "", ""])
+    return header, rows
+
+
+def switching_table_markdown(result: SwingUpResult) -> str:
+    rows = patch_sheet_rows(result)
+    lines = ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
+    lines += ["| " + " | ".join(r) + " |" for r in rows[1:]]
+    return "\n".join(lines) + "\n"
+
+
+def write_outputs(result: SwingUpResult, out_dir: str | Path, stem: str = "swingup", svg: bool = False) -> list[Path]:
+    """Write <stem>-history.csv, <stem>-switching.csv/.md and <stem>.png (and <stem>.svg with
+    ``svg``); return the paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    hist = out / f"{stem}-history.csv"
+    E = pendulum_energy(result.plant, result.x.T) / upright_energy(result.plant)
+    with hist.open("w", newline="") as fh:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(["t_s", "s_m", "theta_rad", "s_dot_m_s", "theta_dot_rad_s", "force_N", "E_over_E0",
+                    "mode"])
+        for i in range(result.t.size):
+            w.writerow([f"{result.t[i]:.4f}"] + [f"{v:.6g}" for v in result.x[i]]
+                       + [f"{result.u[i]:.6g}", f"{E[i]:.6g}", "hold" if result.holding[i] else "pump"])
+    paths.append(hist)
+    table = out / f"{stem}-switching.csv"
+    with table.open("w", newline="") as fh:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(TABLE_COLUMNS)
+        for r in result.table_rows():
+            w.writerow([_fmt(r[c]) for c in TABLE_COLUMNS])
+    paths.append(table)
+    md = out / f"{stem}-switching.md"
+    md.write_text(switching_table_markdown(result))
+    paths.append(md)
+    paths += plot(result, out / f"{stem}.png", out / f"{stem}.svg" if svg else None)
+    return paths
+
+
+def plot(result: SwingUpResult, png: Path, svg: Path | None = None) -> list[Path]:
+    """States, force and energy against time, with the hand-off marked (PNG; SVG when given)."""
+    from patchgen.render import plotting
+
+    t, x = result.t, result.x
+    fig, ax = plotting.stacked(8, 10, 5)
+    cols = plotting.columns(fig)
+    env = lambda y: plotting.envelope(t, y, cols)
+    half = result.plant.d / 2.0
+    ax[0].plot(*env(x[:, 0]), color="C0")
+    for y in (-half, half):
+        ax[0].axhline(y, color="k", lw=0.8, ls="--")
+    ax[0].set_ylabel("s (m)")
+    ax[1].plot(*env(np.degrees(wrap_angle(x[:, 1]))), color="C1")
+    ax[1].set_ylabel("theta (deg, 0 up)")
+    ax[2].plot(*env(x[:, 2]), color="C2", label="s_dot (m/s)")
+    ax[2].plot(*env(x[:, 3]), color="C3", label="theta_dot (rad/s)")
+    ax[2].legend(loc="upper right")
+    ax[3].step(*env(result.u), where="post", color="C4")
+    ax[3].set_ylabel("force (N)")
+    ax[4].plot(*env(pendulum_energy(result.plant, x.T) / upright_energy(result.plant)), color="C5")
+    ax[4].axhline(1.0, color="k", lw=0.8, ls=":")
+    ax[4].set_ylabel("E / E0")
+    ax[4].set_xlabel("t (s)")
+    if result.handoff_time is not None:
+        for a in ax:
+            a.axvline(result.handoff_time, color="k", lw=0.8)
+    title = f"pump-up ({result.strategy}), force limit {result.force_limit:g} N"
+    if result.handoff_time is not None:
+        title += f": hand-off at {result.handoff_time:.3f} s"
+    ax[0].set_title(title)
+    return plotting.save(fig, png, svg, salt="patchgen-swingup")

@@ -1,0 +1,293 @@
+"""The engine as it was before runs went side by side: one run per call, a scalar loop, fast-math.
+Kept verbatim (apart from taking its normals as float64 and this header) as the reference the
+blocked kernel (patchgen.bench.kernel) is checked against, run for run, on the same noise streams."""
+
+import math
+
+import numba as nb
+import numpy as np
+
+from patchgen.bench.circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER
+from patchgen.bench.engine import ACT_GAIN, ACT_LAG, DIST_CART_FORCE, DIST_TIP_FORCE, EngineConfig
+from patchgen.bench.lanes import S_INDEX
+from patchgen.bench.noise import run_normals
+
+_FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
+
+
+def reference_runs(cfg: EngineConfig, draws, n_history: int = 1):
+    """Every run of ``draws`` (patchgen.bench.engine.draw_batch) through the old loop, with the
+    normals the kernel draws for its key. Returns arrays like patchgen.bench.engine.BatchOutput's."""
+    signs, keys, plants = draws
+    runs, n_amp = signs.shape
+    nch = len(cfg.sensor_state) + n_amp
+    noisy = bool(cfg.sensor_noise_std.any() or cfg.amp_noise_std.any())
+    n_samples = cfg.n_steps // cfg.stride + 2
+    out = {"trip_time": np.full(runs, np.nan), "fall_time": np.full(runs, np.nan),
+           "max_abs_theta": np.zeros(runs), "max_abs_s": np.zeros(runs), "rms_theta": np.zeros(runs),
+           "max_abs_u_c": np.zeros(runs), "max_abs_force": np.zeros(runs),
+           "overload_first": np.full((runs, n_amp), np.nan), "overload_time": np.zeros((runs, n_amp)),
+           "final_state": np.zeros((runs, 4)),
+           "history": np.zeros((n_history, n_samples, 8 + n_amp)),
+           "history_length": np.zeros(n_history, dtype=np.int64)}
+    for r in range(runs):
+        gauss = (run_normals(keys[r, 0], keys[r, 1], cfg.n_steps, nch) if noisy
+                 else np.zeros((0, 0)))
+        _one_run(r, signs[r], gauss, cfg.dt, cfg.n_steps, cfg.stride, cfg.x0, plants[r],
+                 cfg.limit_switches, cfg.sensor_state, cfg.sensor_gain, cfg.sensor_noise_a,
+                 cfg.sensor_noise_std, cfg.amp_kind, cfg.in_ptr, cfg.in_src, cfg.in_gain, cfg.param1,
+                 cfg.param2, cfg.ic_V, cfg.drift, cfg.amp_noise_a, cfg.amp_noise_std, cfg.saturation_V,
+                 cfg.clip, cfg.output_index, cfg.actuator, cfg.K_U, cfg.tau, cfg.dead_zone_V,
+                 cfg.force_limit_N, cfg.dist_kind, cfg.dist_t0, cfg.dist_t1, cfg.dist_value,
+                 cfg.fall_angle, out["trip_time"], out["fall_time"], out["max_abs_theta"],
+                 out["max_abs_s"], out["rms_theta"], out["max_abs_u_c"], out["max_abs_force"],
+                 out["overload_first"], out["overload_time"], out["final_state"], out["history"],
+                 out["history_length"])
+    return out
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def plant_rhs(p, th, sd, thd, force, tip_force):
+    """Eq. 2.16-2.19 (as patchgen.plant.equations.nonlinear_rhs) plus a horizontal force at the pendulum
+    tip (distance l): generalised forces tip_force on s and tip_force * l * cos(theta) on theta.
+    Returns (ds, dtheta, ds_dot, dtheta_dot); p = (M, m, l, g, b_VF, c, ...)."""
+    M, m, l, g, b, c = p[0], p[1], p[2], p[3], p[4], p[5]
+    sn, cs = math.sin(th), math.cos(th)
+    den = (M + m) - m * cs * cs
+    bracket = -b * sd + m * l * thd * thd * sn + (c / l) * thd * cs - m * g * sn * cs + force
+    sdd = (bracket + tip_force * sn * sn) / den
+    thdd = -c / (m * l * l) * thd + g / l * sn + tip_force * cs / (m * l) - cs * sdd / l
+    return sd, thd, sdd, thdd
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
+def _rail(out, sat, clip):
+    """An amplifier output held inside the rails (when clipping is on)."""
+    if clip:
+        if out > sat:
+            return sat
+        if out < -sat:
+            return -sat
+    return out
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_ptr, in_src,
+             in_gain, param1, param2, drift, sat, clip, sig, raw, dz_out):
+    """Evaluate sensors and amplifiers in order: sig (clipped if clip), raw (before clipping),
+    and the amplifier state derivatives into dz_out."""
+    ns = sensor_state.shape[0]
+    for i in range(ns):
+        q = xt[sensor_state[i]]
+        if sensor_state[i] == S_INDEX:
+            q -= s_ref
+        sig[i] = sensor_gain[i] * q + nz_s[i]
+    na = amp_kind.shape[0]
+    # outputs in evaluation order (the compiler puts integrators and lags, whose outputs are their
+    # states, before everything that reads them)
+    for j in range(na):
+        kd = amp_kind[j]
+        if kd == INTEGRATOR or kd == LAG:
+            out = zt[j]
+        else:
+            acc = 0.0
+            for k in range(in_ptr[j], in_ptr[j + 1]):
+                acc += in_gain[k] * sig[in_src[k]]
+            if kd == SUMMER:
+                out = -acc
+                dz_out[j] = 0.0
+            else:  # DIFFERENTIATOR with roll-off
+                out = -param1[j] * (acc - zt[j])
+                dz_out[j] = param2[j] * (acc - zt[j])
+        out += nz_a[j]
+        raw[j] = out
+        sig[ns + j] = _rail(out, sat, clip)
+    # last, the integrating amplifiers' inputs, now that every signal of this instant is known
+    for j in range(na):
+        kd = amp_kind[j]
+        if kd == INTEGRATOR or kd == LAG:
+            acc = 0.0
+            for k in range(in_ptr[j], in_ptr[j + 1]):
+                acc += in_gain[k] * sig[in_src[k]]
+            if kd == INTEGRATOR:
+                dz_out[j] = -param1[j] * acc + drift[j]
+            else:
+                dz_out[j] = param1[j] * (-acc - zt[j]) + drift[j]
+    return 0
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
+             sensor_state, sensor_gain, sna, sns,
+             amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,
+             out_index, act, K_U, tau, dz, flim,
+             dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
+             trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final,
+             hist, hist_len):
+    ns = sensor_state.shape[0]
+    na = amp_kind.shape[0]
+    half = p[6]
+    noisy = gauss.shape[0] > 0
+    drift = drift_mag * sign  # each integrating amplifier drifts one way, drawn per run
+    nz_s = np.zeros(ns)
+    nz_a = np.zeros(na)
+    if noisy:  # start the noise in its stationary distribution
+        for i in range(ns):
+            nz_s[i] = gauss[0, i] * sns[i] / math.sqrt(1.0 - sna[i] * sna[i])
+        for j in range(na):
+            nz_a[j] = gauss[0, ns + j] * ans[j] / math.sqrt(1.0 - ana[j] * ana[j])
+    xp = x0.copy()
+    za = ic.copy()
+    sig = np.zeros(ns + na)
+    raw = np.zeros(na)
+    kp = np.zeros((4, 4))  # RK4 slopes of the plant, amplifier and actuator states
+    ka = np.zeros((4, na))
+    kx = np.zeros(4)
+    xt = np.zeros(4)
+    zt = np.zeros(na)
+    # a differentiator starts settled on its input (the angle was held before the run): set its
+    # filter state to its input, in evaluation order (one pass per amplifier reaches every chain)
+    quiet_s = np.zeros(ns)
+    quiet_a = np.zeros(na)
+    for _ in range(na):
+        _circuit(xp, za, 0.0, quiet_s, quiet_a, sensor_state, sensor_gain, amp_kind, in_ptr,
+                 in_src, in_gain, param1, param2, drift, sat, False, sig, raw, zt)
+        for j in range(na):
+            if amp_kind[j] == DIFFERENTIATOR:
+                za[j] -= raw[j] / param1[j]
+    xa = 0.0
+    tripped = False
+    fallen = False
+    pinned = np.zeros(na, dtype=np.bool_)  # clipped at a rail by the last update
+    sum_th2 = 0.0
+    mth = 0.0
+    ms = 0.0
+    muc = 0.0
+    mf = 0.0
+    sample = 0
+    n = 0
+    for n in range(n_steps + 1):
+        t = n * h
+        if noisy and n > 0:  # new noise for this step
+            for i in range(ns):
+                nz_s[i] = sna[i] * nz_s[i] + sns[i] * gauss[n, i]
+            for j in range(na):
+                nz_a[j] = ana[j] * nz_a[j] + ans[j] * gauss[n, ns + j]
+        # disturbances averaged over the step (so an impulse keeps its area at any step)
+        f_cart = 0.0
+        f_tip = 0.0
+        s_ref = 0.0
+        for k in range(dist_kind.shape[0]):
+            overlap = min(t + h, dist_t1[k]) - max(t, dist_t0[k])
+            if overlap > 0.0:
+                v = dist_value[k] * overlap / h
+                if dist_kind[k] == DIST_CART_FORCE:
+                    f_cart += v
+                elif dist_kind[k] == DIST_TIP_FORCE:
+                    f_tip += v
+                else:
+                    s_ref += v
+        force0 = 0.0
+        last = False
+        for st in range(4):
+            if st == 0:
+                for i in range(4):
+                    xt[i] = xp[i]
+                for j in range(na):
+                    zt[j] = za[j]
+                xat = xa
+            else:
+                c = h if st == 3 else 0.5 * h
+                for i in range(4):
+                    xt[i] = xp[i] + c * kp[st - 1, i]
+                for j in range(na):
+                    zt[j] = za[j] + c * ka[st - 1, j]
+                xat = xa + c * kx[st - 1]
+            _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_ptr,
+                     in_src, in_gain, param1, param2, drift, sat, clip, sig, raw, ka[st])
+            uc = sig[out_index]
+            v = 0.0
+            if uc > dz:
+                v = uc - dz
+            elif uc < -dz:
+                v = uc + dz
+            if act == ACT_GAIN:
+                force = K_U * v
+                kx[st] = 0.0
+            elif act == ACT_LAG:
+                force = xat
+                kx[st] = (K_U * v - xat) / tau
+            else:
+                force = K_U / tau * (v - xat)
+                kx[st] = (v - xat) / tau
+            if force > flim:
+                force = flim
+            elif force < -flim:
+                force = -flim
+            if tripped:
+                force = 0.0
+            d0, d1, d2, d3 = plant_rhs(p, xt[1], xt[2], xt[3], force + f_cart, f_tip)
+            kp[st, 0] = d0
+            kp[st, 1] = d1
+            kp[st, 2] = d2
+            kp[st, 3] = d3
+            if st > 0:
+                continue
+            # summaries at time t (state and signals of the step's first stage); the run ends
+            # at the end of the scenario or when the limit switches have cut the motor
+            force0 = force
+            last = n == n_steps or tripped
+            th = xp[1]
+            sum_th2 += th * th
+            mth = max(mth, abs(th))
+            ms = max(ms, abs(xp[0]))
+            muc = max(muc, abs(uc))
+            mf = max(mf, abs(force))
+            if not fallen and abs(th) > fall_angle:
+                fallen = True
+                fall_t[r] = t
+            for j in range(na):
+                if abs(raw[j]) > sat or pinned[j]:
+                    if math.isnan(ovl_first[r, j]):
+                        ovl_first[r, j] = t
+                    if not last:
+                        ovl_time[r, j] += h
+            if r < hist.shape[0] and (n % stride == 0 or last):
+                hist[r, sample, 0] = t
+                for i in range(4):
+                    hist[r, sample, 1 + i] = xp[i]
+                hist[r, sample, 5] = s_ref
+                hist[r, sample, 6] = uc
+                hist[r, sample, 7] = force0
+                for j in range(na):
+                    hist[r, sample, 8 + j] = sig[ns + j]
+                sample += 1
+                hist_len[r] = sample
+            if last:
+                break
+        if last:
+            break
+        for i in range(4):
+            xp[i] += h / 6.0 * (kp[0, i] + 2.0 * kp[1, i] + 2.0 * kp[2, i] + kp[3, i])
+        for j in range(na):
+            za[j] += h / 6.0 * (ka[0, j] + 2.0 * ka[1, j] + 2.0 * ka[2, j] + ka[3, j])
+            pinned[j] = False
+            if clip and amp_kind[j] != DIFFERENTIATOR:  # a capacitor cannot charge past the rails
+                if za[j] > sat:
+                    za[j] = sat
+                    pinned[j] = True
+                elif za[j] < -sat:
+                    za[j] = -sat
+                    pinned[j] = True
+        xa += h / 6.0 * (kx[0] + 2.0 * kx[1] + 2.0 * kx[2] + kx[3])
+        if limit_on and not tripped and abs(xp[0]) >= half:
+            tripped = True
+            trip_t[r] = t + h
+    max_th[r] = mth
+    max_s[r] = ms
+    rms_th[r] = math.sqrt(sum_th2 / (n + 1))
+    max_uc[r] = muc
+    max_f[r] = mf
+    for i in range(4):
+        final[r, i] = xp[i]
+

@@ -1,0 +1,73 @@
+"""Compiling a netlist into the simulator's arrays: order, gains, loops, bad references."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from patchgen.bench.circuit import DIFFERENTIATOR, INTEGRATOR, SUMMER, AlgebraicLoopError, compile_circuit
+from patchgen.inputs.errors import InputError
+from patchgen.patch.netlist import Netlist, read_netlist
+from patchgen.profiles.machine import load_machine
+
+ROOT = Path(__file__).resolve().parents[2]
+GP6 = load_machine("gp6")
+
+
+@pytest.fixture()
+def data() -> dict:
+    return read_netlist(ROOT / "tests/fixtures/thesis-ch5.netlist.json").model_dump(by_alias=True)
+
+
+def _amp(data: dict, amp_id: str) -> dict:
+    return next(a for a in data["amplifiers"] if a["id"] == amp_id)
+
+
+def test_ch5_compiles_as_wired(data):
+    c = compile_circuit(Netlist.model_validate(data), GP6)
+    assert c.sensor_ids == ("s", "theta", "s_dot")
+    # integrator first (its output is a state), then feed-through amplifiers after their sources
+    assert c.amp_ids[0] == "A1"
+    assert c.amp_ids.index("A7") > max(c.amp_ids.index("A5"), c.amp_ids.index("A6"))
+    assert c.output_index == c.signal_index("A7")
+    j = c.amp_ids.index("A6")
+    gains = dict(zip(c.in_src[c.in_ptr[j]:c.in_ptr[j + 1]], c.in_gain[c.in_ptr[j]:c.in_ptr[j + 1]]))
+    # fixture pots: P1 0.226 on x1, P2 0.267 and P3 0.271 on x10
+    assert gains == pytest.approx({c.signal_index("s"): 0.226, c.signal_index("theta"): 2.67,
+                                   c.signal_index("s_dot"): 2.71})
+    kinds = dict(zip(c.amp_ids, c.amp_kind))
+    assert (kinds["A1"], kinds["A5"], kinds["A6"]) == (INTEGRATOR, DIFFERENTIATOR, SUMMER)
+    k5 = c.amp_ids.index("A5")
+    assert c.param1[k5] == pytest.approx(1.0 / 0.01) and c.param2[k5] == pytest.approx(100.0)
+
+
+def test_order_does_not_depend_on_listing_order(data):
+    data["amplifiers"].reverse()
+    c = compile_circuit(Netlist.model_validate(data), GP6)
+    assert c.amp_ids.index("A7") > c.amp_ids.index("A6")
+
+
+def test_missing_rolloff_takes_the_machine_default(data):
+    _amp(data, "A5")["rolloff_s"] = None
+    c = compile_circuit(Netlist.model_validate(data), GP6)
+    k5 = c.amp_ids.index("A5")
+    assert c.param2[k5] == pytest.approx(1.0 / GP6.imperfections.differentiator_rolloff_s)
+
+
+def test_algebraic_loop_is_refused(data):
+    _amp(data, "A6")["inputs"].append({"source": "A7", "pot": None, "weight": 1, "jack": "x1b"})
+    with pytest.raises(AlgebraicLoopError, match="algebraic loop A6 -> A7 -> A6|A7 -> A6 -> A7"):
+        compile_circuit(Netlist.model_validate(data), GP6)
+
+
+def test_a_loop_through_an_integrator_is_fine(data):
+    _amp(data, "A1")["inputs"].append({"source": "A7", "pot": None, "weight": 1, "jack": "x1b"})
+    compile_circuit(Netlist.model_validate(data), GP6)
+
+
+def test_unknown_source_names_the_field(data):
+    _amp(data, "A7")["inputs"][0]["source"] = "A9"
+    with pytest.raises(InputError) as exc:
+        compile_circuit(Netlist.model_validate(data), GP6)
+    assert "inputs[0].source" in exc.value.field and "A9" in exc.value.message

@@ -1,0 +1,80 @@
+"""The compiled loop: same plant equations as patchgen.plant.equations, the noise model, and the step."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from patchgen.bench.circuit import compile_circuit
+from patchgen.bench.engine import default_step, noise_process, plant_rhs
+from patchgen.bench.simulate import engine_config, simulate
+from patchgen.inputs.scenario import Scenario, load_scenario
+from patchgen.patch.netlist import read_netlist
+from patchgen.plant.equations import PlantParams, nonlinear_rhs
+from patchgen.profiles.bench import load_bench
+from patchgen.profiles.machine import load_machine
+
+ROOT = Path(__file__).resolve().parents[2]
+# thesis table B.1
+PLANT = PlantParams(M=3.552, m=0.324, l=0.429, g=9.807, b_VF=2.5775, c=0.001, d=1.090)
+P = np.array([PLANT.M, PLANT.m, PLANT.l, PLANT.g, PLANT.b_VF, PLANT.c, PLANT.d / 2])
+
+
+def test_plant_rhs_is_eq_2_16_to_2_19():
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        x = rng.normal(size=4) * [0.3, 1.0, 1.0, 3.0]
+        f = float(rng.normal() * 10)
+        assert plant_rhs(P, x[1], x[2], x[3], f, 0.0) == pytest.approx(
+            tuple(nonlinear_rhs(PLANT, x, f)), rel=1e-12, abs=1e-12)
+
+
+def test_tip_force_upright_turns_the_pendulum_not_the_cart():
+    """A horizontal push at the tip of the upright point-mass pendulum: the rod carries no
+    horizontal force, so s_ddot = 0 and theta_ddot = F / (m l)."""
+    _, _, sdd, thdd = plant_rhs(P, 0.0, 0.0, 0.0, 0.0, 1.0)
+    assert sdd == 0.0
+    assert thdd == pytest.approx(1.0 / (PLANT.m * PLANT.l))
+
+
+@pytest.mark.parametrize("dt", [1e-3, 2e-3, 1e-2])
+def test_noise_process_keeps_the_low_frequency_density(dt):
+    """White noise of rms sigma over bandwidth B has one-sided density sigma^2 / B."""
+    sigma, band = 0.002, 200.0
+    a, std = noise_process(sigma, band, dt)
+    # low-frequency one-sided density of x' = a x + std w: 2 dt std^2 / (1 - a)^2
+    density = 2.0 * dt * std**2 / (1.0 - a) ** 2
+    assert density == pytest.approx(sigma**2 / band, rel=1e-2 if a == 0.0 else 0.15)
+    assert noise_process(0.0, band, dt) == (0.0, 0.0)
+
+
+@pytest.mark.parametrize("name", ["offset-10deg", "finger-push", "step-cart"])
+@pytest.mark.parametrize("ideal", [True, False])
+def test_halving_the_default_step_moves_theta_less_than_1e_4_rad_rms(name, ideal):
+    """The step's accuracy rule, measured with noise off (a noise realisation depends on the
+    step); the bench runs include dead zone, lag, clipping and the limit switches."""
+    net = read_netlist(ROOT / "tests/fixtures/thesis-ch5.netlist.json")
+    bench, gp6 = load_bench("uw-1991"), load_machine("gp6")
+    base = load_scenario(ROOT / "patchgen" / "sims" / f"{name}.toml").model_dump()
+    _, settings = engine_config(compile_circuit(net, gp6), PLANT, bench, gp6,
+                                Scenario.model_validate(base), ideal=ideal)
+    step = settings.dt_s
+    assert step == (0.01 if ideal else 0.002)  # the defaults this test measures
+    runs = []
+    for dt in (step, step / 2):
+        sc = Scenario.model_validate({**base, "noise": "off", "dt_s": dt, "record_dt_s": 0.01})
+        h = simulate(net, PLANT, bench, gp6, sc, ideal=ideal).history
+        runs.append((np.round(h["t"], 9), h["theta"]))
+    _, i, j = np.intersect1d(runs[0][0], runs[1][0], return_indices=True)
+    assert len(i) > 100
+    rms = math.sqrt(np.mean((runs[0][1][i] - runs[1][1][j]) ** 2))
+    assert rms < 1e-4
+
+
+def test_default_step_resolves_the_fastest_time_constant():
+    assert default_step([], ideal=False) == 0.002
+    assert default_step([], ideal=True) == 0.01
+    assert default_step([0.001, 0.2], ideal=True) == 0.001

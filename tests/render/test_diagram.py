@@ -1,0 +1,103 @@
+"""The SVG wiring diagram: parses, shows every pot (with its setting) and amplifier, same bytes."""
+
+import json
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from patchgen.patch.netlist import Netlist, read_netlist
+from patchgen.render.diagram import quantity_label, wiring_svg
+
+FIXTURE = Path(__file__).parents[1] / "fixtures" / "thesis-ch5.netlist.json"
+SVG_NS = "{http://www.w3.org/2000/svg}"
+
+
+def _texts(svg: str) -> list[str]:
+    root = ET.fromstring(svg)
+    assert root.tag == SVG_NS + "svg"
+    return ["".join(t.itertext()) for t in root.iter(SVG_NS + "text")]
+
+
+def test_svg_shows_every_pot_with_its_setting_and_every_amplifier():
+    net = read_netlist(FIXTURE)
+    texts = _texts(wiring_svg(net))
+    for amp in net.amplifiers:
+        assert amp.id in texts
+    for pot in net.pots:
+        assert pot.id in texts
+    # Settings as the fixture gives them, to the dial resolution 0.001.
+    for setting in ("0.226", "0.267", "0.271", "0.599", "0.001"):
+        assert setting in texts
+    # Sensors named on the left, the control voltage on the right.
+    for name in ("s", "θ", "s\u0307", "u_c"):
+        assert name in texts
+
+
+def test_svg_writes_the_input_weights_inside_the_amplifiers():
+    net = read_netlist(FIXTURE)
+    texts = _texts(wiring_svg(net))
+    # A6 has one x1 and two x10 inputs, A1, A5 and A7 five x1 inputs in all (fixture).
+    assert texts.count("10") == 2
+    assert texts.count("1") == 6
+
+
+def test_svg_marks_integrator_ic_and_differentiator():
+    texts = _texts(wiring_svg(read_netlist(FIXTURE)))
+    assert "IC 0 V" in texts          # A1, ic_V = 0 in the fixture
+    assert "d/dt" in texts            # A5 is the differentiator
+    assert "−∫θ" in texts and "−θ̇" in texts   # what A1 and A5 carry, with sign
+
+
+def test_same_netlist_same_bytes_also_in_a_fresh_process():
+    net = read_netlist(FIXTURE)
+    first = wiring_svg(net)
+    assert wiring_svg(net) == first
+    code = ("import sys; from patchgen.render.diagram import wiring_svg; from patchgen.patch.netlist import "
+            f"read_netlist; sys.stdout.write(wiring_svg(read_netlist({str(FIXTURE)!r})))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=Path(__file__).parents[2])
+    assert out.stdout == first
+
+
+def _two_unit_netlist() -> Netlist:
+    """The fixture duplicated on a second unit, with feedback between the units."""
+    data = json.loads(FIXTURE.read_text())
+    amps, pots = [], []
+    for unit in ("U1", "U2"):
+        for a in json.loads(FIXTURE.read_text())["amplifiers"]:
+            a["id"] = f"{unit}.{a['id']}"
+            for inp in a["inputs"]:
+                if inp["source"].startswith("A"):
+                    inp["source"] = f"{unit}.{inp['source']}"
+                if inp["pot"]:
+                    inp["pot"] = f"{unit}.{inp['pot']}"
+            amps.append(a)
+        for p in json.loads(FIXTURE.read_text())["pots"]:
+            p["id"] = f"{unit}.{p['id']}"
+            p["amplifier"] = f"{unit}.{p['amplifier']}"
+            if p["source"].startswith("A"):
+                p["source"] = f"{unit}.{p['source']}"
+            pots.append(p)
+    # A feedback path: U1.A1 also integrates U2.A7's output (a back edge in the layout).
+    amps[0]["inputs"].append({"jack": "x1b", "pot": None, "source": "U2.A7", "weight": 1})
+    data.update(amplifiers=amps, pots=pots, units=2)
+    data["output"]["source"] = "U2.A7"
+    return Netlist.model_validate(data)
+
+
+def test_two_unit_netlist_with_feedback_draws_every_element():
+    net = _two_unit_netlist()
+    svg = wiring_svg(net)
+    texts = _texts(svg)
+    assert len(net.amplifiers) == 8 and len(net.pots) == 10
+    for element in [a.id for a in net.amplifiers] + [p.id for p in net.pots]:
+        assert element in texts
+    assert wiring_svg(net) == svg
+
+
+def test_quantity_labels():
+    assert quantity_label("theta_dot") == "θ̇"
+    assert quantity_label("int_theta") == "∫θ"
+    assert quantity_label("xhat_s") == "s\u0302"
+    assert quantity_label("u_c") == "u_c"

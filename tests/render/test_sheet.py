@@ -1,0 +1,115 @@
+"""The patch sheet: tables from the netlist, same bytes, and at most two printed pages."""
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from patchgen.patch.netlist import read_netlist, wire_list
+from patchgen.render.diagram import wiring_svg
+from patchgen.render.sheet import SheetSection, SheetSummary, render_sheet
+
+FIXTURE = Path(__file__).parents[1] / "fixtures" / "thesis-ch5.netlist.json"
+MM = 72 / 25.4
+
+# The section 5.3 design (designs/thesis-ch5.toml): K for [s, theta, s_dot, theta_dot, int_theta],
+# its closed-loop poles and LQR margins as `patchgen design` gives them.
+SUMMARY = SheetSummary(
+    design="thesis-ch5",
+    description="LQR of section 5.3 <as wired>",
+    states=["s", "theta", "s_dot", "theta_dot", "int_theta"],
+    K=[-15.8114, -156.7625, -22.5763, -35.1574, -3.2248e-05],
+    poles=[-12.2835, -2.6682, complex(-1.2542, 1.2377), complex(-1.2542, -1.2377), -0.00001],
+    margins={"plant input": {"lower GM": "0.3815 (−8.37 dB)", "PM (deg)": 71.53}},
+    estimator="none: theta_dot from a differentiator",
+    sections=[SheetSection("Predicted on the bench", ["Quantity", "Value"],
+                           [["closed-loop pole with the 0.2 s actuator lag", "+0.32"]])],
+)
+
+
+def _render():
+    net = read_netlist(FIXTURE)
+    return net, *render_sheet(net, SUMMARY, wiring_svg(net))
+
+
+def test_html_pot_table_has_a_row_per_pot():
+    net, html, _ = _render()
+    rows = re.findall(r"<tr><td><b>(P\d)</b></td><td class=\"num set\">([0-9.]+)</td>"
+                      r"<td>([^<]*)</td><td>[^<]*</td><td>([^<]*)</td>"
+                      r"<td class=\"num\">x(\d+)</td>",
+                      html)
+    assert rows == [(p.id, f"{p.setting:.3f}", p.signal, f"{p.amplifier} {p.jack}", str(p.weight))
+                    for p in net.pots]
+    # P2 and P3 use the x10 input (section 5.3: theta and s_dot need the multiplication by 10).
+    assert [r[0] for r in rows if r[4] == "10"] == ["P2", "P3"]
+
+
+def test_pot_error_against_the_design():
+    _, html, md = _render()
+    # P1: realised -0.226 against -0.22571575 -> +0.13 %; P2: -2.67 against -2.67048449 -> -0.02 %.
+    assert "| **P1** | **0.226** |" in md and "+0.13 %" in md
+    assert "−0.02 %" in html
+
+
+def test_sheet_has_every_part_a_lab_needs():
+    net, html, md = _render()
+    for heading in ("Design summary", "Pot settings", "Amplifier assignments", "Wire list",
+                    "Wiring diagram", "Mode and initial conditions", "Bench checklist",
+                    "Predicted on the bench"):
+        assert heading in html and f"## {heading}" in md
+    wires = wire_list(net)
+    for n, (frm, to) in enumerate(wires, 1):
+        assert f"| {n} | {frm} | {to} | ☐ |" in md
+    assert "<svg" in html and "P5" in html.split("<svg", 1)[1]
+    for step in net.operation:
+        assert step in html
+    assert "POT SET" in html and "overload lamps" in html and "servo amplifier last" in html
+    # User text is escaped in HTML.
+    assert "&lt;as wired&gt;" in html and "<as wired>" not in html
+
+
+def test_sign_check_follows_u_equals_minus_K_x():
+    # K_theta < 0, so a positive theta needs a positive force, hence a positive u_c
+    # (conventions.md); every K in section 5.3 is negative, so every path must give +.
+    _, _, md = _render()
+    checks = re.findall(r"^\| (P\d) \| [^|]+ \| [^|]+ \| \*\*(.)\*\* \|$", md, flags=re.MULTILINE)
+    assert checks == [("P1", "+"), ("P2", "+"), ("P3", "+"), ("P4", "+"), ("P5", "+")]
+
+
+def test_same_inputs_same_bytes():
+    _, html, md = _render()
+    _, html2, md2 = _render()
+    assert html == html2 and md == md2
+
+
+def _pdf_pages(pdf: bytes) -> tuple[int, list[tuple[float, float]]]:
+    """Page count and page sizes (pt) of a PDF, read from its page objects."""
+    pages = len(re.findall(rb"/Type\s*/Page(?![a-zA-Z])", pdf))
+    if pages == 0:  # page objects inside compressed object streams: use the page tree's count
+        pages = max(int(c) for c in re.findall(rb"/Count\s+(\d+)", pdf))
+    boxes = [tuple(float(v) for v in m.split()[2:4])
+             for m in re.findall(rb"/MediaBox\s*\[([^\]]*)\]", pdf)]
+    return pages, boxes
+
+
+def test_html_prints_on_at_most_two_pages_that_fit_a4_and_letter(tmp_path):
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    if chromium is None:
+        pytest.skip("chromium is not installed")
+    _, html, _ = _render()
+    page = tmp_path / "patch-sheet.html"
+    page.write_text(html, encoding="utf-8")
+    pdf = tmp_path / "patch-sheet.pdf"
+    subprocess.run([chromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                    "--no-first-run", "--disable-background-networking",
+                    "--disable-component-update", "--disable-sync",
+                    f"--user-data-dir={tmp_path / 'profile'}", "--no-pdf-header-footer",
+                    f"--print-to-pdf={pdf}", page.as_uri()],
+                   check=True, capture_output=True, timeout=180)
+    pages, boxes = _pdf_pages(pdf.read_bytes())
+    assert 1 <= pages <= 2
+    assert boxes
+    for w, h in boxes:   # within A4 (210 x 297 mm) and Letter (215.9 x 279.4 mm)
+        assert w <= 210 * MM + 0.5 and h <= 279.4 * MM + 0.5

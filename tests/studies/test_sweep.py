@@ -1,0 +1,63 @@
+"""`patchgen sweep`: thesis-style tables of gains against 10% parameter changes."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from patchgen.design.lqg import design
+from patchgen.inputs.spec import load_spec
+from patchgen.plant.equations import PlantParams
+from patchgen.profiles.machine import load_machine
+from patchgen.studies.sweep import cases, parse_by, parse_vary, sweep
+from tests.conftest import ROOT, design_path
+
+
+def test_cases_layout():
+    c = cases(["M", "l"], 0.1)
+    assert [label for label, _ in c] == ["nominal", "M +10%", "M -10%", "l +10%", "l -10%", "all +10%"]
+    assert c[-1][1] == {"M": 1.1, "l": 1.1}
+
+
+def test_rows_are_true_designs_of_the_perturbed_plant():
+    spec = load_spec(design_path("thesis-case1-noint"))
+    rows = sweep(spec, load_machine("gp6"), ["M", "l"], 0.1, workers=1)
+    assert rows[0].K == pytest.approx([-15.8114, -209.0301, -31.0045, -52.9470], abs=1e-4)
+    p = spec.plant
+    plant = PlantParams(M=p.M * 1.1, m=p.m, l=p.l, g=p.g, b_VF=p.b_VF, c=p.c, d=p.d)
+    np.testing.assert_allclose(rows[1].K, design(spec, plant=plant).K[0], rtol=1e-12)
+    # a heavier cart needs more gain on theta (thesis 4.6: the gains change little)
+    assert abs(rows[1].K[1]) > abs(rows[0].K[1])
+    assert all(abs(r.K[1] / rows[0].K[1] - 1) < 0.1 for r in rows)
+
+
+def test_ch5_sweep_reports_pot_changes():
+    spec = load_spec(design_path("thesis-ch5"))
+    rows = sweep(spec, load_machine("gp6"), ["M", "m", "l", "b_VF", "c"], 0.1, workers=1)
+    by = {r.label: r for r in rows}
+    assert by["nominal"].pot_changes == {}
+    assert "P2" in by["all +10%"].pot_changes  # the theta pot moves with all parameters up
+    assert by["all +10%"].patch_error is None
+
+
+def test_bad_options():
+    from patchgen.inputs.errors import InputError
+
+    with pytest.raises(InputError):
+        parse_vary("M,mass")
+    with pytest.raises(InputError):
+        parse_by("ten")
+    assert parse_by("10%") == pytest.approx(0.1)
+
+
+def test_cli_json_and_bad_vary():
+    r = subprocess.run([sys.executable, "-m", "patchgen", "sweep", "thesis-case1", "--vary",
+                        "M,m,l,b_VF,c", "--by", "10%", "--json"], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+    rows = json.loads(r.stdout)
+    assert len(rows) == 12 and rows[0]["case"] == "nominal"
+    r = subprocess.run([sys.executable, "-m", "patchgen", "sweep", "thesis-case1", "--vary", "Mx"],
+                       capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 2 and "Mx" in r.stderr and len(r.stderr.strip().splitlines()) == 1

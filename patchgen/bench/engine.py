@@ -36,6 +36,7 @@ from patchgen.bench.kernel import (
     R_FINAL,
     R_TRIP,
     RESULTS,
+    SUMMARIES,
     Disturbances,
     Draws,
     Noise,
@@ -71,7 +72,20 @@ class EngineConfig:
 
 
 def default_step(time_constants: list[float], ideal: bool) -> float:
-    """The fixed step (s) when a scenario gives none (see the module docstring)."""
+    """The fixed step (s) when a scenario gives none (see the module docstring).
+
+    Parameters
+    ----------
+    time_constants : list of float
+        The loop's time constants (s): lags, roll-offs, the actuator's tau; zeros are ignored.
+    ideal : bool
+        Every imperfection off (a smooth loop: a coarser step does).
+
+    Returns
+    -------
+    float
+        BENCH_DT_S or IDEAL_DT_S, or the fastest time constant if that is shorter.
+    """
     base = IDEAL_DT_S if ideal else BENCH_DT_S
     return min([base] + [tc / STEPS_PER_TIME_CONSTANT for tc in time_constants if tc > 0])
 
@@ -83,6 +97,20 @@ def noise_process(rms: float, bandwidth_Hz: float, dt: float) -> tuple[float, fl
     With q = 1 / (2 dt B): a coarse step (q <= 1, Nyquist below B) carries only the in-band
     part, white, std = rms sqrt(q); a fine step uses a = (q - 1) / (q + 1), which gives the same
     density with stationary rms ``rms`` (the two meet at q = 1).
+
+    Parameters
+    ----------
+    rms : float
+        The noise's rms over its band (V); 0 for none.
+    bandwidth_Hz : float
+        Its bandwidth B.
+    dt : float
+        The step (s).
+
+    Returns
+    -------
+    tuple of float
+        (a, std): the memory and the innovation's standard deviation.
     """
     if rms <= 0.0:
         return 0.0, 0.0
@@ -180,7 +208,7 @@ def run_batch(cfg: EngineConfig, draws: Draws, n_history: int) -> BatchOutput:
         _notice_if_compiling(kernel.run_blocks, args)
         kernel.run_blocks(*args)
     return BatchOutput(
-        **{name: results[:, k] for k, name in enumerate(RESULTS[:R_FINAL])},
+        **{name: results[:, RESULTS.index(name)] for name in SUMMARIES},
         final_state=results[:, R_FINAL:R_FINAL + N_STATES], overload_first=out.overload_first,
         overload_time=out.overload_time, history=out.history, history_length=out.history_length,
     )

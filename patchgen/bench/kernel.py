@@ -10,7 +10,9 @@ longer recorded; the block stops when every lane has ended or at the scenario's 
 The loop takes a few records (named tuples, which numba compiles as structs): the runs' draws,
 the scalar settings with the actuator's, the sensors, the noise, the wiring, the disturbances and
 the outputs it fills. Columns of the outputs are named: RESULTS for the per-run figures,
-HISTORY_CHANNELS (then the amplifier outputs) for the history.
+HISTORY_CHANNELS (then the amplifier outputs) for the history. numba's cache index names the
+records' classes: renaming or removing one leaves a cache that no longer loads (delete the
+__pycache__ folders' .nbi and .nbc files).
 
 The arithmetic is plain IEEE, without fast-math, not even fused multiply-add (it is 7 % faster,
 but LLVM fuses differently in a loop's vectorised body and its scalar remainder), so each lane's
@@ -45,10 +47,11 @@ DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 N_STATES = len(PLANT_STATES)
 S, THETA = PLANT_STATES.index("s"), PLANT_STATES.index("theta")
 
-# per-run results: event times (NaN: never), maxima, RMS theta, final plant state
-RESULTS = ("trip_time", "fall_time", "max_abs_theta", "max_abs_s", "rms_theta", "max_abs_u_c",
-           "max_abs_force") + tuple(f"final_{q}" for q in PLANT_STATES)
-R_TRIP, R_FALL, R_MAX_TH, R_MAX_S, R_RMS_TH, R_MAX_UC, R_MAX_F = (RESULTS.index(c) for c in RESULTS[:7])
+# per-run results: event times (NaN: never), maxima, RMS theta, then the final plant state
+SUMMARIES = ("trip_time", "fall_time", "max_abs_theta", "max_abs_s", "rms_theta", "max_abs_u_c",
+             "max_abs_force")
+RESULTS = SUMMARIES + tuple(f"final_{q}" for q in PLANT_STATES)
+R_TRIP, R_FALL, R_MAX_TH, R_MAX_S, R_RMS_TH, R_MAX_UC, R_MAX_F = (RESULTS.index(c) for c in SUMMARIES)
 R_FINAL = RESULTS.index(f"final_{PLANT_STATES[0]}")  # the final state, N_STATES columns
 # history channels before the amplifier outputs
 HISTORY_CHANNELS = ("t",) + PLANT_STATES + ("s_ref", "u_c", "force")

@@ -13,7 +13,11 @@ actuator, sensors and track, and the machine's imperfections; one run or a Monte
   is not an imperfection) and the scenario's disturbances.
 
 So for small angles an ideal run is the linear closed loop of the netlist's realised coefficients
-with the differentiator's roll-off (tests/test_simulate.py checks this).
+with the differentiator's roll-off (tests/bench/test_simulate.py checks this).
+
+The pieces: patchgen.bench.configure resolves the inputs into the engine's records,
+patchgen.bench.engine runs them, patchgen.bench.results summarises the runs, and
+patchgen.bench.files renders the result's files as bytes for patchgen.render.outputs.write_files.
 """
 
 from __future__ import annotations

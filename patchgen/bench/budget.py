@@ -30,14 +30,57 @@ class Cost:
 
 
 def estimate(steps: int, runs: int, stride: int, history: bool) -> Cost:
-    """The cost of ``runs`` runs of ``steps`` steps, the first recorded every ``stride`` steps."""
+    """The cost of ``runs`` runs of ``steps`` steps, the first recorded every ``stride`` steps.
+
+    Parameters
+    ----------
+    steps, runs : int
+        Steps of one run, and runs.
+    stride : int
+        Steps between two history samples.
+    history : bool
+        Whether the first run keeps its history.
+
+    Returns
+    -------
+    Cost
+        Steps per run, over all runs, and history samples.
+    """
     return Cost(steps, steps * runs, steps // stride + 1 if history else 0)
 
 
 def check(scenario: Scenario, runs: int, *, step: float, stride: int, history: bool, usual_step: float) -> Cost:
-    """Refuse a simulation past the bounds; the error names the scenario field (or --runs) at fault:
-    dt_s when the scenario asks for a step finer than ``usual_step`` (the engine's own), else
-    duration_s."""
+    """Refuse a simulation past the bounds, before anything is allocated.
+
+    The error names the scenario field (or --runs) at fault: dt_s when the scenario asks for a
+    step finer than ``usual_step`` (the engine's own), else duration_s; record_dt_s for a history
+    too long.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Its duration, step and path (for the message).
+    runs : int
+        Runs of the Monte Carlo.
+    step : float
+        The step the engine will take (s).
+    stride : int
+        Steps between two history samples.
+    history : bool
+        Whether the first run keeps its history.
+    usual_step : float
+        The engine's own step (s), to tell a scenario's fine step from a long duration.
+
+    Returns
+    -------
+    Cost
+        The simulation's size, within the bounds.
+
+    Raises
+    ------
+    InputError
+        Past MAX_RUN_STEPS or MAX_HISTORY_SAMPLES.
+    """
     steps = max(1, math.ceil(scenario.duration_s / step - 1e-9))
     cost = estimate(steps, runs, stride, history)
     fine = scenario.dt_s is not None and scenario.dt_s < usual_step

@@ -16,18 +16,23 @@ from patchgen.profiles.bench import BenchProfile
 
 @dataclass(frozen=True)
 class LoopPoles:
+    """The closed-loop poles (1/s) of the wired loop with one actuator model, named in words."""
+
     actuator: str
     poles: np.ndarray
 
     @property
     def stable(self) -> bool:
+        """Every pole in the open left half-plane."""
         return bool(np.max(self.poles.real) < 0)
 
     @property
     def worst(self) -> complex:
+        """The rightmost pole."""
         return complex(self.poles[np.argmax(self.poles.real)])
 
     def line(self) -> str:
+        """One line for a terminal: the actuator, stable or not, the rightmost pole."""
         w = self.worst
         pole = f"{w.real:+.3f}" + (f" ± {abs(w.imag):.3f}j" if abs(w.imag) > 1e-9 else "")
         verdict = "stable" if self.stable else "UNSTABLE"
@@ -35,7 +40,24 @@ class LoopPoles:
 
 
 def linear_loop_poles(net: Netlist, plant: PlantParams, K_U: float, tau: float | None) -> np.ndarray:
-    """Closed-loop poles of plant + wired controller + actuator (gain K_U, optional lag tau)."""
+    """Closed-loop poles of plant + wired controller + actuator, linearised about upright.
+
+    Parameters
+    ----------
+    net : Netlist
+        The patch; its controller is read back as wired (patchgen.patch.readback).
+    plant : PlantParams
+        The plant (eq. 2.28).
+    K_U : float
+        The actuator's gain (N/V).
+    tau : float or None
+        The actuator's lag (s); None for a pure gain.
+
+    Returns
+    -------
+    numpy.ndarray
+        The poles (1/s), complex.
+    """
     law = wired_law(net)
     Ap, Bp = linear_matrices(plant)
     ks = np.zeros((len(law.inputs), 4))
@@ -64,7 +86,14 @@ def linear_loop_poles(net: Netlist, plant: PlantParams, K_U: float, tau: float |
 
 
 def diagnose(net: Netlist, plant: PlantParams, bench: BenchProfile) -> list[LoopPoles]:
-    """The linearised loop with an ideal actuator and with the bench's actuator lag."""
+    """The linearised loop with an ideal actuator and, when the bench has one, with its lag:
+    why a patch holds on paper and not on the bench.
+
+    Returns
+    -------
+    list of LoopPoles
+        The ideal actuator first, then the bench's (a lag model with tau > 0).
+    """
     act = bench.actuator
     out = [LoopPoles("ideal actuator (pure gain K_U)", linear_loop_poles(net, plant, act.K_U, None))]
     if act.model != "gain" and act.tau > 0:

@@ -2,85 +2,22 @@
 (quantity, lane), loops over lanes innermost so that LLVM vectorises them across runs.
 
 Indexing, not views: numba reference-counts a view, and a view per row and stage would cost more
-than the row's arithmetic. Branches that differ between lanes are selects, and sine and cosine are
-computed by arithmetic (libm's are scalar calls, which stop a loop from vectorising).
+than the row's arithmetic. Branches that differ between lanes are selects; the plant's equations,
+sine and cosine by arithmetic included, are patchgen.plant.compiled's.
 """
 
 from __future__ import annotations
-
-import math
 
 import numba as nb
 import numpy as np
 
 from patchgen.bench.circuit import INTEGRATOR, LAG, SUMMER
+from patchgen.plant.compiled import plant_accel, sincos
 from patchgen.plant.equations import PLANT_STATES
 
 ACT_GAIN, ACT_LAG, ACT_LAG_ZERO = 0, 1, 2
 S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
 _JIT = {"cache": True, "error_model": "numpy"}  # as patchgen.bench.kernel's
-
-_TWO_OVER_PI = 2.0 / math.pi
-_PIO2_A = math.ldexp(math.floor(math.ldexp(math.pi / 2, 30)), -30)  # 31 bits: k * _PIO2_A exact
-_PIO2_B = math.pi / 2 - _PIO2_A  # the rest of the double nearest pi/2 (an exact difference)
-_PIO2_C = 6.123233995736766e-17  # pi/2 minus that double
-# Taylor coefficients, highest order first: sin r = r + r z (S1 + z S2 + ...), cos r = 1 + z (C1 + ...)
-_SIN = tuple((-1) ** k / math.factorial(2 * k + 1) for k in range(8, 0, -1))
-_COS = tuple((-1) ** k / math.factorial(2 * k) for k in range(9, 0, -1))
-
-
-@nb.njit(inline="always", **_JIT)
-def sincos(x):
-    """(sin x, cos x) by arithmetic alone, so that a loop over lanes vectorises (libm's are
-    scalar calls): reduction by pi/2 in three parts, then Taylor series on |r| <= pi/4, where the
-    first omitted terms are below 1e-19. Within a few ulp of libm for |x| < 1e5."""
-    k = math.floor(x * _TWO_OVER_PI + 0.5)
-    r = ((x - k * _PIO2_A) - k * _PIO2_B) - k * _PIO2_C
-    z = r * r
-    ps = 0.0
-    for a in _SIN:
-        ps = ps * z + a
-    pc = 0.0
-    for a in _COS:
-        pc = pc * z + a
-    s = r + r * z * ps
-    c = 1.0 + z * pc
-    q = np.int64(k)  # the quadrant, by selects (a return per quadrant stops vectorisation)
-    swap = (q & 1) != 0
-    sn = c if swap else s
-    cs = s if swap else c
-    return (-sn if q & 2 else sn), (-cs if (q + 1) & 2 else cs)
-
-
-N_COEF = 10
-
-
-@nb.njit(inline="always", **_JIT)
-def plant_coefficients(p, out):
-    """The per-run constants of eq. 2.16-2.19 from p = (M, m, l, g, b_VF, c, ...), into out."""
-    M, m, l, g, b, c = p[0], p[1], p[2], p[3], p[4], p[5]
-    out[0], out[1], out[2], out[3], out[4] = M + m, m, m * l, c / l, m * g
-    out[5], out[6], out[7], out[8], out[9] = b, -c / (m * l * l), g / l, 1.0 / (m * l), 1.0 / l
-
-
-@nb.njit(inline="always", **_JIT)
-def plant_accel(q, i, sn, cs, sd, thd, force, tip):
-    """(s_ddot, theta_ddot) of eq. 2.16-2.19 with coefficients q[:, i], plus a horizontal force at
-    the pendulum tip (distance l): generalised forces tip on s and tip * l * cos(theta) on theta."""
-    den = q[0, i] - q[1, i] * cs * cs
-    bracket = -q[5, i] * sd + q[2, i] * thd * thd * sn + q[3, i] * thd * cs - q[4, i] * sn * cs + force
-    sdd = (bracket + tip * sn * sn) / den
-    return sdd, q[6, i] * thd + q[7, i] * sn + tip * cs * q[8, i] - cs * sdd * q[9, i]
-
-
-@nb.njit(**_JIT)
-def plant_rhs(p, th, sd, thd, force, tip_force):
-    """(ds, dtheta, ds_dot, dtheta_dot) as the kernel computes them (p = M, m, l, g, b_VF, c)."""
-    q = np.empty((N_COEF, 1))
-    plant_coefficients(p, q[:, 0])
-    sn, cs = sincos(th)
-    sdd, thdd = plant_accel(q, 0, sn, cs, sd, thd, force, tip_force)
-    return sd, thd, sdd, thdd
 
 
 @nb.njit(inline="always", **_JIT)
@@ -104,10 +41,13 @@ def _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc):
 
 
 @nb.njit(**_JIT)
-def circuit(X, Z, s_ref, nz, sensor_state, sensor_gain, amp_kind, in_ptr, in_src, in_gain,
-            param1, param2, drift, sat, clip, sig, raw, dz, st, acc):
+def circuit(X, Z, s_ref, nz, sensors, wiring, drift, sat, clip, sig, raw, dz, st, acc):
     """Sensors and amplifiers in evaluation order: sig (clipped if clip; its last row stays 0),
-    raw (before clipping), and the amplifier state derivatives into dz[st] (a summer's stay 0)."""
+    raw (before clipping), and the amplifier state derivatives into dz[st] (a summer's stay 0).
+    sensors, wiring: patchgen.bench.kernel's Sensors and Wiring; X, Z, nz, drift are per lane."""
+    sensor_state, sensor_gain = sensors.state, sensors.gain
+    amp_kind, in_ptr, in_src, in_gain = wiring.kind, wiring.in_ptr, wiring.in_src, wiring.in_gain
+    param1, param2 = wiring.param1, wiring.param2
     ns = sensor_state.shape[0]
     nl = acc.shape[1]
     hi = sat if clip else np.inf
@@ -154,11 +94,12 @@ def circuit(X, Z, s_ref, nz, sensor_state, sensor_gain, amp_kind, in_ptr, in_src
 
 
 @nb.njit(**_JIT)
-def drive(X, XA, sig, out_index, tripped, pc, actuator, f_cart, f_tip, kp, kx, forces, st):
+def drive(X, XA, sig, out_index, tripped, pc, settings, f_cart, f_tip, kp, kx, forces, st):
     """Actuator (dead zone, model, force limit; off once tripped) and plant slopes per lane,
-    into kp[st], kx[st], forces[st]. actuator = (model ACT_*, K_U, tau, dead zone, force limit);
-    X (plant state), XA (actuator state) and pc (plant_coefficients) are per lane."""
-    act, K_U, tau, dz, flim = actuator
+    into kp[st], kx[st], forces[st]. settings: patchgen.bench.kernel's Settings (the actuator's
+    model ACT_*, K_U, tau, dead zone, force limit); X (plant state), XA (actuator state) and pc
+    (plant_coefficients) are per lane."""
+    act, K_U, tau, dz, flim = settings.actuator, settings.K_U, settings.tau, settings.dead_zone, settings.force_limit
     inv_tau = 1.0 / tau
     ku_tau = K_U / tau
     for l in range(XA.shape[0]):

@@ -32,7 +32,7 @@ WORDS = 4  # normals per Philox call: channels are drawn in groups of four
 def _ziggurat(layers: int = 2**_LAYER_BITS, r: float = 4.038849846109505):
     """Layer edges x_0 > x_1 = r > ... > x_layers = 0 of equal area v under f = exp(-x^2/2)
     (layer 0: the rectangle below f(r), x_0 = v / f(r), plus the tail), r being the edge at which
-    that many layers close at the top (found by bisection; tests/test_kernel.py checks it); and
+    that many layers close at the top (found by bisection; tests/bench/test_kernel.py checks it); and
     per layer: w (x = j w for a _J_BITS-bit j), k (j < k is under the curve at every height of the
     layer), f at its outer and inner edge."""
     f = lambda x: math.exp(-0.5 * x * x)

@@ -17,6 +17,9 @@ STANDARD = ("offset-10deg", "finger-push", "step-cart", "hold-120s")
 
 @dataclass(frozen=True)
 class Prediction:
+    """One standard scenario on the bench: the fraction of runs held, run 0's events, the worst
+    figures over the runs and the amplifiers that overloaded."""
+
     scenario: str
     description: str
     runs: int
@@ -31,10 +34,28 @@ class Prediction:
 def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
             runs_hold: int = 20, scenarios: tuple[str, ...] = STANDARD,
             done: dict[str, list[RunSummary]] | None = None) -> list[Prediction]:
-    """Each standard scenario on the bench (noise and drift as the profiles say); the long hold as a
-    small Monte Carlo over noise seeds, the others as one run at their own seed. ``done`` holds runs
-    already simulated on this patch, bench and machine, by scenario name, from the scenario's own
-    seed: run i depends on its seed alone, so their first runs stand in for simulating again."""
+    """Each standard scenario on the bench (noise and drift as the profiles say).
+
+    The long hold is a small Monte Carlo over noise seeds, the others one run at their own seed.
+
+    Parameters
+    ----------
+    net, plant, bench, machine : Netlist, PlantParams, BenchProfile, MachineProfile
+        The patch and what it runs on.
+    runs_hold : int
+        Runs of the hold-120s Monte Carlo.
+    scenarios : tuple of str
+        The scenarios, by name.
+    done : dict of str to list of RunSummary, optional
+        Runs already simulated on this patch, bench and machine, by scenario name, from the
+        scenario's own seed: run i depends on its seed alone, so their first runs stand in for
+        simulating again.
+
+    Returns
+    -------
+    list of Prediction
+        One per scenario, in order.
+    """
     out = []
     for name in scenarios:
         sc = load_scenario(name)
@@ -52,6 +73,7 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
 
 
 def prediction_rows(preds: list[Prediction]) -> tuple[list[str], list[list[str]]]:
+    """The predictions as a table for the patch sheet: (header, rows of text)."""
     header = ["scenario", "runs", "held", "limit switch (run 0)", "fallen (run 0)", "max |theta| (deg)",
               "max |s| (m)", "overloads"]
     rows = []
@@ -64,4 +86,5 @@ def prediction_rows(preds: list[Prediction]) -> tuple[list[str], list[list[str]]
 
 
 def diagnosis_note(net: Netlist, plant: PlantParams, bench: BenchProfile) -> str:
+    """The linearised loop's verdicts (see patchgen.bench.diagnosis) as one sentence for the sheet."""
     return "Linearised: " + "; ".join(lp.line() for lp in diagnose(net, plant, bench)) + "."

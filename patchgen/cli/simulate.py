@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import tempfile
 from pathlib import Path
 
 import click
@@ -11,7 +10,8 @@ from rich.console import Console
 from rich.table import Table
 
 from patchgen.bench.diagnosis import diagnose
-from patchgen.bench.simulate import SimResult, simulate, write_outputs
+from patchgen.bench.files import output_files
+from patchgen.bench.simulate import SimResult, simulate
 from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.render import plot_helper
@@ -27,7 +27,8 @@ SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "his
 
 def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal, keep_history=True,
                       quiet=False, spread=None) -> SimResult:
-    """simulate() with a progress bar when there is more than one run."""
+    """patchgen.bench.simulate.simulate with a progress bar on stderr when there is more than one
+    run (and not ``quiet``); the arguments are simulate's."""
     if runs <= 1 or quiet:
         return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
                         keep_history=keep_history, spread=spread)
@@ -42,14 +43,8 @@ def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal
                         progress=lambda done: prog.update(task, completed=done))
 
 
-def rendered_outputs(result: SimResult, svg: bool = False) -> dict[str, bytes]:
-    """The simulator's files, rendered in a scratch directory and read back (for all-or-nothing writes)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        paths = write_outputs(result, tmp, svg=svg)
-        return {p.name: p.read_bytes() for p in paths}
-
-
 def summary_table(result: SimResult) -> Table:
+    """The first run's figures and, for a Monte Carlo, their distribution, as a rich table."""
     d = result.distribution
     r0 = result.runs[0]
     t = Table(title=f"{result.design} on the {result.bench} bench, scenario {result.scenario.name}"
@@ -121,7 +116,7 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
     net = build_patch(d, machine)
     result = run_with_progress(net, plant_params(d.spec), bench, machine, scenario, seed=seed, runs=runs,
                                ideal=ideal, quiet=as_json, spread=spread)
-    files = rendered_outputs(result, svg)
+    files = output_files(result, svg)
     files["netlist.json"] = net.to_json().encode()
     written = write_files(out_dir, files, force=force)
     if as_json:

@@ -22,7 +22,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import minimize
 
-from patchgen.bench.lanes import N_COEF, plant_accel, plant_coefficients, sincos
+from patchgen.plant.compiled import N_COEF, plant_accel, plant_coefficients, sincos
 from patchgen.plant.equations import PlantParams
 from patchgen.swingup.handoff import Zone, wrapped
 from patchgen.swingup.strategies import (

@@ -8,38 +8,40 @@ import numba as nb
 import numpy as np
 
 from patchgen.bench.circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER
-from patchgen.bench.engine import ACT_GAIN, ACT_LAG, DIST_CART_FORCE, DIST_TIP_FORCE, EngineConfig
-from patchgen.bench.lanes import S_INDEX
+from patchgen.bench.engine import EngineConfig
+from patchgen.bench.kernel import DIST_CART_FORCE, DIST_TIP_FORCE, H_AMPS, Draws
+from patchgen.bench.lanes import ACT_GAIN, ACT_LAG, S_INDEX
 from patchgen.bench.noise import run_normals
 
 _FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
 
 
-def reference_runs(cfg: EngineConfig, draws, n_history: int = 1):
+def reference_runs(cfg: EngineConfig, draws: Draws, n_history: int = 1):
     """Every run of ``draws`` (patchgen.bench.engine.draw_batch) through the old loop, with the
     normals the kernel draws for its key. Returns arrays like patchgen.bench.engine.BatchOutput's."""
-    signs, keys, plants = draws
+    keys, signs, plants = draws
+    st, sensors, noise, w, dist = cfg.records
     runs, n_amp = signs.shape
-    nch = len(cfg.sensor_state) + n_amp
-    noisy = bool(cfg.sensor_noise_std.any() or cfg.amp_noise_std.any())
-    n_samples = cfg.n_steps // cfg.stride + 2
+    ns = len(sensors.state)
+    nch = ns + n_amp
+    noisy = bool(noise.std.any())
+    n_samples = st.steps // st.stride + 2
     out = {"trip_time": np.full(runs, np.nan), "fall_time": np.full(runs, np.nan),
            "max_abs_theta": np.zeros(runs), "max_abs_s": np.zeros(runs), "rms_theta": np.zeros(runs),
            "max_abs_u_c": np.zeros(runs), "max_abs_force": np.zeros(runs),
            "overload_first": np.full((runs, n_amp), np.nan), "overload_time": np.zeros((runs, n_amp)),
            "final_state": np.zeros((runs, 4)),
-           "history": np.zeros((n_history, n_samples, 8 + n_amp)),
+           "history": np.zeros((n_history, n_samples, H_AMPS + n_amp)),
            "history_length": np.zeros(n_history, dtype=np.int64)}
     for r in range(runs):
-        gauss = (run_normals(keys[r, 0], keys[r, 1], cfg.n_steps, nch) if noisy
+        gauss = (run_normals(keys[r, 0], keys[r, 1], st.steps, nch) if noisy
                  else np.zeros((0, 0)))
-        _one_run(r, signs[r], gauss, cfg.dt, cfg.n_steps, cfg.stride, cfg.x0, plants[r],
-                 cfg.limit_switches, cfg.sensor_state, cfg.sensor_gain, cfg.sensor_noise_a,
-                 cfg.sensor_noise_std, cfg.amp_kind, cfg.in_ptr, cfg.in_src, cfg.in_gain, cfg.param1,
-                 cfg.param2, cfg.ic_V, cfg.drift, cfg.amp_noise_a, cfg.amp_noise_std, cfg.saturation_V,
-                 cfg.clip, cfg.output_index, cfg.actuator, cfg.K_U, cfg.tau, cfg.dead_zone_V,
-                 cfg.force_limit_N, cfg.dist_kind, cfg.dist_t0, cfg.dist_t1, cfg.dist_value,
-                 cfg.fall_angle, out["trip_time"], out["fall_time"], out["max_abs_theta"],
+        _one_run(r, signs[r], gauss, st.dt, st.steps, st.stride, st.x0, plants[r],
+                 st.limit_switches, sensors.state, sensors.gain, noise.a[:ns], noise.std[:ns],
+                 w.kind, w.in_ptr, w.in_src, w.in_gain, w.param1, w.param2, w.ic, w.drift,
+                 noise.a[ns:], noise.std[ns:], st.saturation, st.clip, st.output, st.actuator,
+                 st.K_U, st.tau, st.dead_zone, st.force_limit, dist.kind, dist.t0, dist.t1,
+                 dist.value, st.fall_angle, out["trip_time"], out["fall_time"], out["max_abs_theta"],
                  out["max_abs_s"], out["rms_theta"], out["max_abs_u_c"], out["max_abs_force"],
                  out["overload_first"], out["overload_time"], out["final_state"], out["history"],
                  out["history_length"])

@@ -9,10 +9,12 @@ import numpy as np
 import pytest
 
 from patchgen.bench.circuit import compile_circuit
-from patchgen.bench.engine import default_step, noise_process, plant_rhs
-from patchgen.bench.simulate import engine_config, simulate
+from patchgen.bench.configure import engine_config
+from patchgen.bench.engine import default_step, noise_process
+from patchgen.bench.simulate import simulate
 from patchgen.inputs.scenario import Scenario, load_scenario
 from patchgen.patch.netlist import read_netlist
+from patchgen.plant.compiled import plant_rhs
 from patchgen.plant.equations import PlantParams, nonlinear_rhs
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine

@@ -19,14 +19,14 @@ from scipy import stats
 
 from patchgen.bench import kernel
 from patchgen.bench.circuit import compile_circuit
+from patchgen.bench.configure import engine_config
 from patchgen.bench.engine import draw_batch, run_batch
-from patchgen.bench.lanes import sincos
 from patchgen.bench.noise import ZIGGURAT_EDGES, philox, run_normals
-from patchgen.bench.simulate import engine_config
 from patchgen.cli.design import design_from_path
 from patchgen.design.model import plant_params
 from patchgen.inputs.scenario import Scenario, load_scenario
 from patchgen.patch.build import build_patch
+from patchgen.plant.compiled import sincos
 from patchgen.profiles.bench import load_bench
 from tests.conftest import ROOT, design_path
 
@@ -141,13 +141,16 @@ def test_a_run_is_the_same_in_any_block_and_on_any_number_of_threads():
 
 
 def test_the_kernel_names_the_code_compiled_into_it():
-    """numba's cache of patchgen/bench/kernel.py is stamped with that file alone: a change in lanes.py or
-    noise.py (compiled into it) must change it too, through kernel.COMPILED_IN."""
+    """numba's cache of patchgen/bench/kernel.py is stamped with that file alone: a change in a
+    file whose functions are compiled into it must change it too, through kernel.COMPILED_IN."""
+    package = Path(kernel.__file__).parents[1]
+    assert set(kernel.COMPILED_FILES) == {"bench/lanes.py", "bench/noise.py", "plant/compiled.py"}
     digest = hashlib.sha256()
-    for name in ("lanes.py", "noise.py"):
-        digest.update((Path(kernel.__file__).parent / name).read_bytes())
+    for name in kernel.COMPILED_FILES:
+        digest.update((package / name).read_bytes())
     assert kernel.COMPILED_IN == digest.hexdigest()[:16], (
-        f"lanes.py or noise.py changed: set COMPILED_IN = {digest.hexdigest()[:16]!r} in patchgen/bench/kernel.py")
+        f"{', '.join(kernel.COMPILED_FILES)} changed: set COMPILED_IN = {digest.hexdigest()[:16]!r} "
+        "in patchgen/bench/kernel.py")
 
 
 def test_compile_notice_only_when_numba_will_compile(tmp_path):

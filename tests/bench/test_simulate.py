@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from patchgen.bench.simulate import simulate, write_outputs
+from patchgen.bench.files import output_files
+from patchgen.bench.simulate import simulate
 from patchgen.inputs.scenario import Scenario, load_scenario
 from patchgen.patch.netlist import Netlist, read_netlist
 from patchgen.plant.equations import PlantParams, linear_matrices
@@ -136,17 +137,38 @@ def test_monte_carlo_distribution_and_progress(ch5):
     assert p["p5"] <= p["p50"] <= p["p95"]
 
 
-def test_outputs_are_deterministic(ch5, tmp_path):
+def test_outputs_are_deterministic(ch5):
     sc = load_scenario(SIMS / "finger-push.toml").model_copy(update={"duration_s": 3.0})
     res = simulate(ch5, PLANT, BENCH, GP6, sc)
-    first = write_outputs(res, tmp_path / "a", svg=True)
-    second = write_outputs(simulate(ch5, PLANT, BENCH, GP6, sc), tmp_path / "b", svg=True)
-    names = sorted(p.name for p in first)
-    assert names == ["history.csv", "history.png", "history.svg", "runs.csv", "summary.json"]
-    assert "history.svg" not in {p.name for p in write_outputs(res, tmp_path / "c")}  # SVG on request
-    for p, q in zip(first, second):
-        assert p.read_bytes() == q.read_bytes(), p.name
-    header = (tmp_path / "a/history.csv").read_text().splitlines()[0].split(",")
+    first = output_files(res, svg=True)
+    second = output_files(simulate(ch5, PLANT, BENCH, GP6, sc), svg=True)
+    assert list(first) == ["history.csv", "runs.csv", "summary.json", "history.png", "history.svg"]
+    assert "history.svg" not in output_files(res)  # SVG on request
+    assert first == second
+    assert first["history.png"].startswith(b"\x89PNG") and b"<svg" in first["history.svg"]
+    header = first["history.csv"].decode().splitlines()[0].split(",")
     assert header[:8] == ["t_s", "s_m", "theta_rad", "s_dot_m_per_s", "theta_dot_rad_per_s",
                           "s_ref_m", "u_c_V", "force_N"]
     assert header[8:] == [f"{a}_V" for a in res.amplifiers]
+    runs = first["runs.csv"].decode().splitlines()
+    assert len(runs) == 2 and runs[1].startswith("0,")
+
+
+def test_outputs_without_history_are_the_tables_alone(ch5):
+    sc = load_scenario(SIMS / "finger-push.toml").model_copy(update={"duration_s": 1.0})
+    res = simulate(ch5, PLANT, BENCH, GP6, sc, runs=3, keep_history=False)
+    files = output_files(res, svg=True)
+    assert list(files) == ["runs.csv", "summary.json"]
+    assert len(files["runs.csv"].decode().splitlines()) == 4
+
+
+def test_the_plot_leaves_matplotlib_settings_alone(ch5):
+    import matplotlib
+
+    sc = load_scenario(SIMS / "finger-push.toml").model_copy(update={"duration_s": 1.0})
+    res = simulate(ch5, PLANT, BENCH, GP6, sc)
+    before = dict(matplotlib.rcParams)
+    output_files(res, svg=True)  # no plot helper started: drawn in this process
+    after = dict(matplotlib.rcParams)
+    assert {k for k in before if before[k] != after[k]} == set()
+    assert before["font.size"] != 8 and before["svg.hashsalt"] is None

@@ -1,0 +1,157 @@
+"""The engine's configuration: profiles, scenario and ``ideal`` resolved into the records the
+compiled loop takes (patchgen.bench.engine.EngineConfig), with the step, the noise processes, the
+drift, the actuator model and the disturbances, and a readable account of them (SimSettings)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from patchgen.bench.circuit import Circuit
+from patchgen.bench.engine import EngineConfig, default_step, noise_process
+from patchgen.bench.kernel import (
+    DIST_CART_FORCE,
+    DIST_STEP,
+    DIST_TIP_FORCE,
+    Disturbances,
+    Noise,
+    Sensors,
+    Settings,
+    Wiring,
+)
+from patchgen.bench.lanes import ACT_GAIN, ACT_LAG, ACT_LAG_ZERO
+from patchgen.bench.results import SimSettings
+from patchgen.inputs.errors import InputError
+from patchgen.inputs.scenario import Scenario
+from patchgen.plant.equations import PlantParams
+from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
+
+SPREAD_ORDER = ("M", "m", "l", "g", "b_VF", "c", "d")  # PLANT_VECTOR's parameters (d: half track)
+
+
+def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
+                  machine: MachineProfile, scenario: Scenario, *,
+                  ideal: bool = False, spread: dict[str, float] | None = None) -> tuple[EngineConfig, SimSettings]:
+    """Resolve profiles, scenario and ``ideal`` into the engine's records, and a readable account.
+
+    Parameters
+    ----------
+    circuit : Circuit
+        The compiled netlist.
+    plant : PlantParams
+        The nominal plant.
+    bench, machine : BenchProfile, MachineProfile
+        The actuator, sensors and track; the machine's imperfections.
+    scenario : Scenario
+        Duration, step, noise, drift, disturbances, initial state.
+    ideal : bool
+        Every imperfection off (see patchgen.bench.simulate).
+    spread : dict of str to float, optional
+        Per plant parameter (SPREAD_ORDER's names), the fraction within which each run draws it.
+
+    Returns
+    -------
+    EngineConfig, SimSettings
+        What the engine runs, and what was simulated, in words and SI units.
+    """
+    spread = dict(spread or {})
+    fastest = [1.0 / v for v in circuit.time_rates() if v > 0]
+    if not ideal and bench.actuator.model != "gain":
+        fastest.append(bench.actuator.tau)
+    step = scenario.dt_s or default_step(fastest, ideal)
+    n_steps = max(1, math.ceil(scenario.duration_s / step - 1e-9))
+    step = scenario.duration_s / n_steps
+    stride = max(1, round(scenario.record_dt_s / step))
+    imp = machine.imperfections
+
+    sens = bench.sensors
+    if ideal or scenario.noise.mode == "off":
+        sensor_rms = {s: 0.0 for s in circuit.sensor_ids}
+        amp_rms = 0.0
+    elif scenario.noise.mode == "explicit":
+        sensor_rms = {s: scenario.noise.level(s) for s in circuit.sensor_ids}
+        amp_rms = scenario.noise.level("amplifier")
+    else:
+        sensor_rms = {s: float(sens.noise_V_rms.get(s, 0.0)) for s in circuit.sensor_ids}
+        amp_rms = imp.amplifier_noise_V_rms
+    s_proc = [noise_process(sensor_rms[s], sens.noise_bandwidth_Hz, step)
+              for s in circuit.sensor_ids]
+    a_proc = noise_process(amp_rms, imp.noise_bandwidth_Hz, step)
+
+    if ideal or scenario.drift == "off":
+        drift = 0.0
+    elif scenario.drift == "profile":
+        drift = machine.integrator_drift_V_per_s()
+    else:
+        drift = float(scenario.drift)
+
+    act = bench.actuator
+    if ideal:
+        model, tau, dead, flim = ACT_GAIN, 0.0, 0.0, math.inf
+        act_text = f"ideal: pure gain K_U = {act.K_U} N/V (no lag, dead zone or force limit)"
+    else:
+        model = {"gain": ACT_GAIN, "lag": ACT_LAG, "lag_zero": ACT_LAG_ZERO}[act.model]
+        tau, dead, flim = act.tau, act.dead_zone_V, act.force_limit_N
+        if model != ACT_GAIN and tau <= 0:
+            if model == ACT_LAG_ZERO:
+                raise InputError(f"bench {bench.id}", "actuator.tau",
+                                 "model lag_zero needs tau > 0")
+            model = ACT_GAIN
+        act_text = (f"{act.model}: K_U = {act.K_U} N/V, tau = {tau} s, "
+                    f"dead zone +/-{dead} V, force limit +/-{flim} N")
+
+    kinds, t0s, t1s, vals = [], [], [], []
+    for d in scenario.disturbances:
+        if d.kind == "step":
+            kinds.append(DIST_STEP)
+            t0s.append(d.time_s)
+            t1s.append(math.inf)
+            vals.append(d.size_m)
+        else:
+            kinds.append(DIST_TIP_FORCE if d.at == "pendulum_tip" else DIST_CART_FORCE)
+            t0s.append(d.time_s)
+            t1s.append(d.time_s + d.duration_s)
+            vals.append(d.force_N)
+
+    cfg = EngineConfig(
+        settings=Settings(
+            dt=float(step), steps=int(n_steps), stride=int(stride), saturation=float(imp.saturation_V),
+            clip=not ideal, limit_switches=bool(bench.track.limit_switches),
+            fall_angle=math.radians(scenario.fall_angle_deg), output=int(circuit.output_index),
+            x0=np.array(scenario.initial.vector(), dtype=np.float64),
+            actuator=int(model), K_U=float(act.K_U), tau=float(tau), dead_zone=float(dead),
+            force_limit=float(flim)),
+        sensors=Sensors(state=_i64(circuit.sensor_state), gain=_f64(circuit.sensor_gain)),
+        noise=Noise(a=_f64([p[0] for p in s_proc] + [a_proc[0]] * circuit.n_amps),
+                    std=_f64([p[1] for p in s_proc] + [a_proc[1]] * circuit.n_amps)),
+        wiring=Wiring(kind=_i64(circuit.amp_kind), in_ptr=_i64(circuit.in_ptr), in_src=_i64(circuit.in_src),
+                      in_gain=_f64(circuit.in_gain), param1=_f64(circuit.param1),
+                      param2=_f64(circuit.param2), ic=_f64(circuit.ic_V),
+                      drift=_f64(np.where(circuit.drifting(), drift, 0.0))),
+        disturbances=Disturbances(kind=_i64(kinds), t0=_f64(t0s), t1=_f64(t1s), value=_f64(vals)),
+        plant=_f64([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c, plant.d / 2]),
+        plant_spread=_f64([spread.get(k, 0.0) for k in SPREAD_ORDER]),
+    )
+    settings = SimSettings(
+        dt_s=step, steps=n_steps, record_dt_s=stride * step,
+        sensor_noise_V_rms=sensor_rms, sensor_noise_bandwidth_Hz=sens.noise_bandwidth_Hz,
+        amplifier_noise_V_rms=amp_rms, amplifier_noise_bandwidth_Hz=imp.noise_bandwidth_Hz,
+        integrator_drift_V_per_s=drift,
+        saturation_V=imp.saturation_V, saturation_clipped=not ideal,
+        actuator=act_text, limit_switches=bool(bench.track.limit_switches),
+        half_track_m=plant.d / 2,
+        plant_spread={k: v for k, v in spread.items() if v},
+    )
+    return cfg, settings
+
+
+def _f64(values) -> np.ndarray:
+    """A contiguous float64 array, as the compiled loop takes it."""
+    return np.ascontiguousarray(values, dtype=np.float64)
+
+
+def _i64(values) -> np.ndarray:
+    """A contiguous int64 array, as the compiled loop takes it."""
+    return np.ascontiguousarray(values, dtype=np.int64)

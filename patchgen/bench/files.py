@@ -1,0 +1,150 @@
+"""A simulation's files, rendered to bytes for the all-or-nothing writer
+(patchgen.render.outputs.write_files): history.csv (first run), runs.csv (one line per run),
+summary.json (sorted keys) and the history.png plot (and history.svg). The same result gives the
+same bytes. The plot is drawn in the plot helper process when one was started
+(patchgen.render.plot_helper), while this one writes the tables."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+
+import numpy as np
+
+from patchgen.bench.results import SimResult
+from patchgen.render import plot_helper
+
+FONT_SIZE = 8  # points: the plot's text, small enough for a panel 1.5 inches high
+SVG_SALT = "patchgen"  # the SVG's hash salt, as patchgen.render.plotting.save's default
+_UNITS = {"t": "s", "s": "m", "theta": "rad", "s_dot": "m_per_s", "theta_dot": "rad_per_s",
+          "s_ref": "m", "u_c": "V", "force": "N"}
+
+
+def output_files(result: SimResult, svg: bool = False) -> dict[str, bytes]:
+    """The simulation's files by name, in the order they are listed.
+
+    Parameters
+    ----------
+    result : SimResult
+        The simulation; without a history, only runs.csv and summary.json.
+    svg : bool
+        Also history.svg (PNG only by default).
+
+    Returns
+    -------
+    dict of str to bytes
+        history.csv, runs.csv, summary.json, history.png, history.svg, those there are.
+    """
+    plot = plot_helper.submit(_plot, result, svg) if result.history is not None else None
+    files = {}
+    if result.history is not None:
+        files["history.csv"] = _history_csv(result.history).encode()
+    files["runs.csv"] = _runs_csv(result).encode()
+    files["summary.json"] = (json.dumps(result.summary(), indent=2, sort_keys=True, allow_nan=False)
+                             + "\n").encode()
+    if plot is not None:
+        files.update(plot.result())
+    return files
+
+
+def _history_csv(history: dict[str, np.ndarray]) -> str:
+    """The history's channels as columns, named with their units."""
+    names = list(history)
+    header = [f"{n}_{_UNITS.get(n, 'V')}" for n in names]
+    cols = np.column_stack([history[n] for n in names])
+    buf = io.StringIO()
+    buf.write(",".join(header) + "\n")
+    if np.isnan(cols).any():
+        for row in cols:
+            buf.write(",".join(_num(v) for v in row) + "\n")
+    else:  # one %-format per row: the same text as _num, four times faster
+        line = ",".join(["%.9g"] * len(names)) + "\n"
+        buf.writelines(line % tuple(row) for row in cols.tolist())
+    return buf.getvalue()
+
+
+def _runs_csv(result: SimResult) -> str:
+    """One line per run: held, trip and fall times, maxima, RMS theta, overloads."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["run", "held", "limit_switch_tripped", "trip_time_s", "fallen",
+                "fall_time_s", "max_abs_theta_deg", "max_abs_s_m", "rms_theta_deg",
+                "max_abs_u_c_V", "max_abs_force_N", "overloads"])
+    for r in result.runs:
+        w.writerow([r.run, int(r.held), int(r.limit_switch_tripped), _num(r.trip_time_s),
+                    int(r.fallen), _num(r.fall_time_s), _num(r.max_abs_theta_deg),
+                    _num(r.max_abs_s_m), _num(r.rms_theta_deg), _num(r.max_abs_u_c_V),
+                    _num(r.max_abs_force_N),
+                    " ".join(f"{o.amplifier}@{_num(o.first_time_s)}" for o in r.overloads)])
+    return buf.getvalue()
+
+
+def _num(v: float | None) -> str:
+    return "" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.9g}"
+
+
+def _plot(result: SimResult, svg: bool = False) -> dict[str, bytes]:
+    """The first run's histories, a panel each; u_c shares the panel of the amplifier that
+    makes it (the same trace), with the rails. Returns history.png (and history.svg) by name.
+    matplotlib's settings are changed only inside a context, for this figure."""
+    import matplotlib
+
+    from patchgen.render import plotting
+
+    h = result.history
+    t = h["t"]
+    first = result.runs[0]
+    sat = result.settings.saturation_V
+    out_amp = [a for a in result.amplifiers if np.array_equal(h[a], h["u_c"])][:1]
+    panels = [("s (m)", [("s", h["s"]), ("s_ref", h["s_ref"])], None),
+              ("theta (deg)", [("theta", np.degrees(h["theta"]))], None),
+              (f"u_c = {out_amp[0]} (V)" if out_amp else "u_c (V)", [("u_c", h["u_c"])], sat if out_amp else None),
+              ("force (N)", [("force", h["force"])], None)]
+    panels += [(f"{a} (V)", [(a, h[a])], sat) for a in result.amplifiers if a not in out_amp]
+    with matplotlib.rc_context({"font.size": FONT_SIZE}):
+        fig, axes = plotting.stacked(8.0, 1.5 * len(panels) + 0.6, len(panels))
+        cols = plotting.columns(fig)
+        for ax, (label, lines, rail) in zip(axes, panels):
+            for name, y in lines:
+                ax.plot(*plotting.envelope(t, y, cols), lw=0.8, label=name)
+            if rail is not None:
+                ax.axhline(rail, color="tab:red", lw=0.6, ls="--")
+                ax.axhline(-rail, color="tab:red", lw=0.6, ls="--")
+            if first.trip_time_s is not None:
+                ax.axvline(first.trip_time_s, color="black", lw=0.6, ls=":")
+            if first.fall_time_s is not None:
+                ax.axvline(first.fall_time_s, color="tab:purple", lw=0.6, ls=":")
+            ax.set_ylabel(label)
+            ax.grid(True, lw=0.3)
+            if len(lines) > 1:
+                ax.legend(loc="upper right", fontsize=7, ncols=len(lines))
+        axes[-1].set_xlabel("t (s)")
+        mode = "ideal" if result.ideal else f"bench {result.bench}"
+        events = []
+        if first.trip_time_s is not None:
+            events.append(f"limit switch at {first.trip_time_s:.2f} s")
+        if first.fall_time_s is not None:
+            events.append(f"fallen at {first.fall_time_s:.2f} s")
+        fig.suptitle(f"{result.design} / {result.scenario.name} / {mode} / seed {result.seed}: "
+                     + (", ".join(events) if events else "held"))
+        return _rendered(fig, "history", svg)
+
+
+def _rendered(fig, stem: str, svg: bool) -> dict[str, bytes]:
+    """The figure as PNG (no software tag) and, with ``svg``, as a deterministic SVG (glyphs as
+    paths, fixed hash salt, no date), as patchgen.render.plotting.save writes them."""
+    import matplotlib
+
+    from patchgen.render import plotting
+
+    png = io.BytesIO()
+    fig.savefig(png, format="png", dpi=plotting.PNG_DPI, metadata={"Software": None})
+    files = {f"{stem}.png": png.getvalue()}
+    if svg:
+        text = io.BytesIO()
+        with matplotlib.rc_context({**plotting.SVG_RC, "svg.hashsalt": SVG_SALT}):
+            fig.savefig(text, format="svg", metadata={"Date": None, "Creator": None})
+        files[f"{stem}.svg"] = text.getvalue()
+    return files

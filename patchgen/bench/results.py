@@ -1,0 +1,203 @@
+"""What a simulation found: each run's summary, the Monte Carlo's distribution, the settings
+simulated, and the first run's history (``SimResult``); built from the engine's batches."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from patchgen.bench.engine import BatchOutput
+from patchgen.inputs.scenario import Scenario
+
+PERCENTILES = (5, 50, 95)
+
+IDEAL_MEANING = (
+    "no sensor or amplifier noise, no integrator drift, no saturation (overloads still recorded), "
+    "actuator a pure gain K_U; kept: nonlinear plant, pot settings as dialled, weights and "
+    "inversions, differentiator roll-off as wired, limit switches, disturbances")
+
+
+@dataclass(frozen=True)
+class Overload:
+    """An amplifier output beyond the rails: when first, and for how long in all."""
+
+    amplifier: str
+    first_time_s: float
+    total_time_s: float
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """What run ``run`` (random draws from numpy's default generator seeded [seed, run]) did.
+    Times are None when the event did not happen. A run ends at the
+    scenario's end or at the limit-switch trip (the motor is off, the experiment over): the
+    figures cover the run up to there."""
+
+    run: int
+    held: bool  # neither fallen nor the limit switches tripped
+    limit_switch_tripped: bool
+    trip_time_s: float | None
+    fallen: bool
+    fall_time_s: float | None
+    max_abs_theta_deg: float
+    max_abs_s_m: float
+    rms_theta_deg: float
+    max_abs_u_c_V: float
+    max_abs_force_N: float
+    overloads: tuple[Overload, ...]
+    final_state: tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """The Monte Carlo over noise seeds: fractions and percentiles (5, 50, 95) of each figure;
+    event-time percentiles are over the runs where the event happened (None when none did)."""
+
+    runs: int
+    fraction_held: float
+    fraction_tripped: float
+    fraction_fallen: float
+    fraction_overloaded: float
+    overload_fraction: dict[str, float]  # per amplifier
+    percentiles: dict[str, dict[str, float | None]]
+
+
+@dataclass(frozen=True)
+class SimSettings:
+    """What was simulated, resolved from the profiles, the scenario and ``ideal``."""
+
+    dt_s: float
+    steps: int
+    record_dt_s: float
+    sensor_noise_V_rms: dict[str, float]
+    sensor_noise_bandwidth_Hz: float
+    amplifier_noise_V_rms: float
+    amplifier_noise_bandwidth_Hz: float
+    integrator_drift_V_per_s: float
+    saturation_V: float
+    saturation_clipped: bool
+    actuator: str
+    limit_switches: bool
+    half_track_m: float
+    plant_spread: dict[str, float]
+
+
+@dataclass
+class SimResult:
+    """A simulation: what was simulated (design, scenario, profiles, ``ideal``, seed, settings),
+    each run's summary, their distribution and the first run's history (channel name -> samples:
+    patchgen.bench.kernel.HISTORY_CHANNELS, then the amplifiers)."""
+
+    design: str
+    scenario: Scenario
+    machine: str
+    bench: str
+    ideal: bool
+    seed: int
+    settings: SimSettings
+    amplifiers: tuple[str, ...]  # in evaluation order, as in the history
+    history: dict[str, np.ndarray] | None  # of the first run (its seed is ``seed``'s run 0)
+    runs: list[RunSummary]
+    distribution: Distribution
+
+    def summary(self) -> dict:
+        """Everything but the histories, as plain JSON-able data."""
+        return {
+            "design": self.design,
+            "scenario": self.scenario.model_dump(mode="json", exclude_none=True),
+            "machine": self.machine,
+            "bench": self.bench,
+            "ideal": self.ideal,
+            "ideal_meaning": IDEAL_MEANING if self.ideal else None,
+            "seed": self.seed,
+            "settings": asdict(self.settings),
+            "amplifiers": list(self.amplifiers),
+            "first_run": _jsonable(asdict(self.runs[0])),
+            "distribution": _jsonable(asdict(self.distribution)),
+        }
+
+
+def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...]) -> list[RunSummary]:
+    """Each run's summary, from the engine's batches in run order.
+
+    Parameters
+    ----------
+    parts : list of BatchOutput
+        The batches, the first run first.
+    amp_ids : tuple of str
+        The amplifiers in evaluation order (the engine's columns).
+
+    Returns
+    -------
+    list of RunSummary
+        One per run, numbered from 0.
+    """
+    def cat(name: str) -> np.ndarray:
+        return np.concatenate([getattr(p, name) for p in parts])
+
+    trip, fall = cat("trip_time"), cat("fall_time")
+    ovl_first, ovl_time = cat("overload_first"), cat("overload_time")
+    max_th, max_s, rms_th = cat("max_abs_theta"), cat("max_abs_s"), cat("rms_theta")
+    max_uc, max_f, final = cat("max_abs_u_c"), cat("max_abs_force"), cat("final_state")
+    return [
+        RunSummary(
+            run=i,
+            held=bool(np.isnan(trip[i]) and np.isnan(fall[i])),
+            limit_switch_tripped=bool(not np.isnan(trip[i])), trip_time_s=_opt(trip[i]),
+            fallen=bool(not np.isnan(fall[i])), fall_time_s=_opt(fall[i]),
+            max_abs_theta_deg=math.degrees(max_th[i]), max_abs_s_m=float(max_s[i]),
+            rms_theta_deg=math.degrees(rms_th[i]), max_abs_u_c_V=float(max_uc[i]),
+            max_abs_force_N=float(max_f[i]),
+            overloads=tuple(
+                Overload(amp_ids[j], _opt(ovl_first[i, j]), round(float(ovl_time[i, j]), 9))
+                for j in np.argsort(ovl_first[i], kind="stable") if not np.isnan(ovl_first[i, j])),
+            final_state=tuple(float(v) for v in final[i]),
+        )
+        for i in range(len(trip))
+    ]
+
+
+def distribution(runs: list[RunSummary], amps: tuple[str, ...]) -> Distribution:
+    """The Monte Carlo's fractions and percentiles over ``runs`` (``amps``: every amplifier)."""
+    n = len(runs)
+
+    def pct(values: list[float]) -> dict[str, float | None]:
+        if not values:
+            return {f"p{q}": None for q in PERCENTILES}
+        return {f"p{q}": float(v) for q, v in zip(PERCENTILES, np.percentile(values, PERCENTILES))}
+
+    return Distribution(
+        runs=n,
+        fraction_held=sum(r.held for r in runs) / n,
+        fraction_tripped=sum(r.limit_switch_tripped for r in runs) / n,
+        fraction_fallen=sum(r.fallen for r in runs) / n,
+        fraction_overloaded=sum(bool(r.overloads) for r in runs) / n,
+        overload_fraction={a: sum(any(o.amplifier == a for o in r.overloads) for r in runs) / n
+                           for a in amps},
+        percentiles={
+            "max_abs_theta_deg": pct([r.max_abs_theta_deg for r in runs]),
+            "max_abs_s_m": pct([r.max_abs_s_m for r in runs]),
+            "rms_theta_deg": pct([r.rms_theta_deg for r in runs]),
+            "max_abs_u_c_V": pct([r.max_abs_u_c_V for r in runs]),
+            "trip_time_s": pct([r.trip_time_s for r in runs if r.trip_time_s is not None]),
+            "fall_time_s": pct([r.fall_time_s for r in runs if r.fall_time_s is not None]),
+        },
+    )
+
+
+def _opt(v: float) -> float | None:
+    """An event time (n * dt) rounded to the nanosecond, or None when it did not happen."""
+    return None if np.isnan(v) else round(float(v), 9)
+
+
+def _jsonable(obj):
+    """Tuples to lists and non-finite floats to None, recursively."""
+    if isinstance(obj, dict):
+        return {k: _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj

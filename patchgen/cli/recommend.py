@@ -13,7 +13,7 @@ from patchgen.render.outputs import check_out_dir, write_files
 from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.pottable import pot_table
 from patchgen.studies.comparison import fmt_figure, gm_cell, outcome_cells, recommendation_files, table_rows
-from patchgen.studies.recommend import recommend
+from patchgen.studies.recommend import RUNS, recommend
 
 from . import cli
 from .inputs import load_inputs, scenario_for
@@ -26,7 +26,7 @@ RECOMMEND_FILES = PATCH_FILES + ("recommendation.md", "recommendation.json")
 @click.argument("spec")
 @click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Directory for the recommended patch (as patchgen patch writes it).")
-@click.option("--runs", default=200, show_default=True, type=click.IntRange(1, 100000),
+@click.option("--runs", default=RUNS, show_default=True, type=click.IntRange(1, 100000),
               help="Monte Carlo noise seeds per realisation.")
 @click.option("--scenario", "scenario_path", default="hold-120s", show_default=True,
               help="Scenario: a shipped name or a TOML file.")

@@ -60,6 +60,8 @@ class NoiseModel:
 
 @dataclass(frozen=True)
 class CornerChoice:
+    """The chosen roll-off (s) or pole (rad/s), its predicted force error (N), the grid's size."""
+
     value: float
     force_error_rms_N: float
     tried: int

@@ -34,6 +34,9 @@ RANK_TOL = 1e-9  # the PBH rank test's singular-value cut-off for "the input can
 
 @dataclass(frozen=True)
 class Design:
+    """A spec's design: the model, the LQR weights, gain and Riccati solution, poles, zeros,
+    the estimator and the controller it gives, and the loop margins with and without it."""
+
     spec: DesignSpec
     model: LinearModel
     Q: np.ndarray
@@ -50,9 +53,11 @@ class Design:
 
     @property
     def states(self) -> tuple[str, ...]:
+        """The design model's states, in K's order."""
         return self.model.states
 
     def gain(self, state: str) -> float:
+        """The LQR gain on one named state (u = -K x)."""
         return float(self.K[0, self.model.index(state)])
 
 

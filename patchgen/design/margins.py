@@ -24,6 +24,8 @@ EDGE_STEP = 1e-3  # relative: a gain limit is real when the gain this far past i
 
 @dataclass(frozen=True)
 class Margins:
+    """The loop margins at the plant input: gain limits (factors), phase and delay margins."""
+
     stable: bool
     lower_gm: float | None  # factor (< 1), None if gain may go to zero
     upper_gm: float | None  # factor (> 1), None if infinite
@@ -35,13 +37,16 @@ class Margins:
 
     @property
     def lower_gm_db(self) -> float | None:
+        """The lower gain limit in dB (negative), None when the gain may fall to zero."""
         return None if self.lower_gm is None else 20 * math.log10(self.lower_gm)
 
     @property
     def upper_gm_db(self) -> float | None:
+        """The upper gain limit in dB, None when infinite."""
         return None if self.upper_gm is None else 20 * math.log10(self.upper_gm)
 
     def as_dict(self) -> dict:
+        """Every field and the limits in dB, as plain values."""
         d = asdict(self)
         d["lower_gm_db"] = self.lower_gm_db
         d["upper_gm_db"] = self.upper_gm_db

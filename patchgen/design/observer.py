@@ -37,6 +37,7 @@ class ObserverError(ValueError):
 
 
 def unmeasured_states(model: LinearModel) -> tuple[str, ...]:
+    """The estimated states the sensors do not measure (theta_dot, and the actuator's)."""
     return tuple(s for s in model.estimated if s not in model.measured)
 
 

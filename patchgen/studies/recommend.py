@@ -39,6 +39,8 @@ CANDIDATES = (
 )
 
 
+RUNS = 200  # noise seeds per candidate: the held fraction in steps of half a percent
+
 # Figures are rounded before ranking, so that noise in the last digits cannot reorder candidates.
 FRACTION_DIGITS = 6  # fraction of runs held: below one run in a million
 MARGIN_DIGITS = 1  # gain margin (dB) and phase margin (deg), as the table prints them
@@ -209,7 +211,7 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
 
 
 def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenario: Scenario,
-              runs: int = 200, seed: int | None = None,
+              runs: int = RUNS, seed: int | None = None,
               progress: Callable[[str, int, int], None] | None = None) -> Recommendation:
     """Design, allocate and simulate every candidate, and rank them.
 

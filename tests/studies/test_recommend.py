@@ -75,8 +75,14 @@ def test_recommended_netlist_reads_back_to_the_design(recommended):
 def test_ranking_is_deterministic():
     spec = load_spec(design_path("bench-recommended"))
     m, b, sc = load_machine("gp6"), load_bench("uw-1991"), load_scenario(HOLD)
-    a = recommend(spec, m, b, sc, runs=6)
+    calls = []
+    a = recommend(spec, m, b, sc, runs=6, progress=lambda *call: calls.append(call))
     c = recommend(spec, m, b, sc, runs=6)
+    # the command's progress bar: runs done over all candidates that fit, each labelled
+    total = 6 * sum(x.fraction_ok is not None for x in a.ranked)
+    assert {t for _, _, t in calls} == {total} and calls[-1][1] == total
+    assert [n for _, n, _ in calls] == sorted(n for _, n, _ in calls)
+    assert {label for label, _, _ in calls} == {x.label for x in a.ranked if x.fraction_ok is not None}
     assert [x.label for x in a.ranked] == [x.label for x in c.ranked]
     assert table_rows(a) == table_rows(c)
     # candidates that do not fit come last, with their resource error

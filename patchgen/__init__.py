@@ -4,7 +4,9 @@ The Python API (docs/api.md) is loaded on first use, so ``import patchgen`` stay
 
 - :func:`load_design` a shipped design by name, a spec file or a spec, designed;
 - :func:`plant_ss`, :func:`compensator_ss`, :func:`loop_ss`, :func:`closed_loop_ss` that design
-  as ``control.StateSpace`` objects with named signals.
+  as ``control.StateSpace`` objects with named signals;
+- :func:`design_on` the design stage on a loaded spec and profiles (no file read); the stage
+  itself is :func:`patchgen.design.lqg.design` (``patchgen.design`` is the design folder).
 """
 
 __version__ = "0.2.0"
@@ -16,7 +18,7 @@ _LAZY = {
     "loop_ss": "patchgen.design.lti",
     "closed_loop_ss": "patchgen.design.lti",
     "load_spec": "patchgen.inputs.spec",
-    "design": "patchgen.design.lqg",
+    "design_on": "patchgen.design.lqg",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -20,7 +20,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 COMMANDS = ("design", "patch", "simulate", "spice", "recommend", "swingup", "sweep", "examples")
 
 # The first sentence of each command's docstring, for `patchgen --help` without importing every
-# command (and so numpy, scipy, numba, matplotlib). tests/test_cli_imports.py keeps them in step.
+# command (and so numpy, scipy, numba, matplotlib). tests/cli/test_cli_imports.py keeps them in step.
 SUMMARIES = {
     "design": "Compute the LQR gain, Kalman estimator, loop transfer recovery and loop margins of SPEC.",
     "patch": "Scale SPEC's gains, allocate the machine and write the patch: netlist.json, pots.csv, "

@@ -7,23 +7,19 @@ import json
 import click
 from rich.console import Console
 
-from patchgen.design.lqg import design
+from patchgen.design.lqg import Design, design_on
 from patchgen.design.report import design_dict, print_design
+from patchgen.profiles.machine import MachineProfile
 
 from . import cli
 from .inputs import load_inputs
 
 
-def design_from_path(path: str):
-    """Load the spec (and check the profiles it names) and run the design, taking the
-    differentiator roll-off default from the machine."""
-    spec, machine, _ = load_inputs(path)
-    return design_of(spec, machine), machine
-
-
-def design_of(spec, machine):
-    """The design of a loaded spec, with the machine's differentiator roll-off as the default."""
-    return design(spec, default_rolloff_s=machine.imperfections.differentiator_rolloff_s)
+def design_from_path(path: str) -> tuple[Design, MachineProfile]:
+    """The design of a spec file or shipped name on the machine and bench it names (each loaded
+    and checked first), and that machine."""
+    spec, machine, bench = load_inputs(path)
+    return design_on(spec, machine, bench), machine
 
 
 @cli.command("design")

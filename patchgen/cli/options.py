@@ -1,4 +1,5 @@
-"""Option types the commands share: numbers that must be finite and in range, and seeds.
+"""Option types the commands share: numbers that must be finite and in range, seeds, and the
+plant parameters and fraction a sweep or a spread varies them by.
 
 click's FloatRange lets ``nan`` through (every comparison with it is false) and has no upper
 bound unless given one; ``FiniteFloat`` refuses nan and inf and checks both ends.
@@ -9,6 +10,9 @@ from __future__ import annotations
 import math
 
 import click
+
+from patchgen.inputs.errors import InputError
+from patchgen.studies.sweep import VARIABLE
 
 SEED = click.IntRange(0, 2**63 - 1)  # numpy's generators take a non-negative 64-bit seed
 
@@ -34,3 +38,26 @@ class FiniteFloat(click.ParamType):
         if (self.lo is not None and x < self.lo) or (self.hi is not None and x > self.hi):
             self.fail(f"{value!r} is not within {self.lo:g} to {self.hi:g}", param, ctx)
         return x
+
+
+def parse_vary(text: str, option: str = "--vary") -> list[str]:
+    """Comma-separated plant parameters (of VARIABLE); an InputError naming ``option`` otherwise."""
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    for n in names:
+        if n not in VARIABLE:
+            raise InputError(option, "", f"unknown parameter {n!r} (choose from {', '.join(VARIABLE)})")
+    if not names:
+        raise InputError(option, "", "name at least one parameter")
+    return names
+
+
+def parse_by(text: str, option: str = "--by") -> float:
+    """A fraction ("0.1") or percentage ("10%") strictly between 0 and 1; an InputError otherwise."""
+    t = text.strip()
+    try:
+        v = float(t[:-1]) / 100 if t.endswith("%") else float(t)
+    except ValueError:
+        raise InputError(option, "", f"{text!r} is not a fraction or a percentage (e.g. 10%)") from None
+    if not (0 < v < 1):
+        raise InputError(option, "", f"{text!r} must be between 0 and 100%")
+    return v

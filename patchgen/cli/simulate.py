@@ -12,13 +12,13 @@ from rich.table import Table
 from patchgen.bench.diagnosis import diagnose
 from patchgen.bench.files import output_files
 from patchgen.bench.simulate import SimResult, simulate
+from patchgen.design.lqg import design_on
 from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, write_files
 
 from . import cli
-from .design import design_of
 from .inputs import load_inputs, scenario_for
 from .options import SEED
 
@@ -104,7 +104,7 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
     """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
     spread = None
     if spread_text is not None:
-        from patchgen.studies.sweep import parse_by, parse_vary
+        from .options import parse_by, parse_vary
 
         frac = parse_by(spread_text, "--spread")
         spread = {name: frac for name in parse_vary(vary)}
@@ -112,7 +112,7 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
     plot_helper.start()  # matplotlib loads on the other core while this one simulates
     sp, machine, bench = load_inputs(spec)
     scenario = scenario_for(scenario_path, sp, runs, ideal)
-    d = design_of(sp, machine)
+    d = design_on(sp, machine, bench)
     net = build_patch(d, machine)
     result = run_with_progress(net, plant_params(d.spec), bench, machine, scenario, seed=seed, runs=runs,
                                ideal=ideal, quiet=as_json, spread=spread)

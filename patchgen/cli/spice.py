@@ -13,6 +13,7 @@ from rich.console import Console
 from rich.table import Table
 
 from patchgen.bench.simulate import simulate
+from patchgen.design.lqg import design_on
 from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.render import plot_helper
@@ -28,7 +29,6 @@ from patchgen.spice.deck import (
 )
 
 from . import cli
-from .design import design_of
 from .inputs import check_spice_points, load_inputs, scenario_for
 from .options import FiniteFloat
 
@@ -69,7 +69,7 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_js
     sp, machine, bench = load_inputs(spec)
     scenario = scenario_for(scenario_path, sp, 1, ideal)
     check_spice_points(scenario, step_s)
-    d = design_of(sp, machine)
+    d = design_on(sp, machine, bench)
     net = build_patch(d, machine)
     plant = plant_params(d.spec)
     noise_on = (not ideal) and scenario.noise.mode != "off"

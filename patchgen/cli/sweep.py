@@ -8,11 +8,12 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from patchgen.studies.sweep import parse_by, parse_vary, sweep
+from patchgen.design.lqg import design_on
+from patchgen.studies.sweep import sweep
 
 from . import cli
-from .design import design_of
 from .inputs import load_inputs, scenario_for
+from .options import parse_by, parse_vary
 
 
 def _db(x):
@@ -33,21 +34,13 @@ def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: s
     """Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2): the gains, the
     margins, the pots that would change, and how the nominal patch (as wired) does on that plant."""
     names, by = parse_vary(vary), parse_by(by_text)
-    sp, machine, _ = load_inputs(spec)
+    sp, machine, bench = load_inputs(spec)
     scenario_for(scenario_path, sp, runs)  # a bad scenario fails here, in one line
-    d = design_of(sp, machine)
-    rows = sweep(d.spec, machine, names, by, workers, scenario_path, runs)
+    d = design_on(sp, machine, bench)
+    rows = sweep(d.spec, machine, names, by, workers, scenario_path, runs, bench=bench)
     states = list(d.states)
     if as_json:
-        click.echo(json.dumps([{
-            "case": r.label, "factors": r.factors, "K": r.K,
-            "lqr_margins": {"lower_gm_db": r.lqr_margins.lower_gm_db, "upper_gm_db": r.lqr_margins.upper_gm_db,
-                            "pm_deg": r.lqr_margins.pm_deg},
-            "lqg_margins": None if r.lqg_margins is None else {
-                "lower_gm_db": r.lqg_margins.lower_gm_db, "upper_gm_db": r.lqg_margins.upper_gm_db,
-                "pm_deg": r.lqg_margins.pm_deg, "stable": r.lqg_margins.stable},
-            "pot_changes": r.pot_changes, "patch_error": r.patch_error, "outcome": r.outcome} for r in rows],
-            indent=2, sort_keys=True, allow_nan=False))
+        click.echo(json.dumps([r.as_dict() for r in rows], indent=2, sort_keys=True, allow_nan=False))
         return
     t = Table(title=f"{d.spec.name}: LQR gain K (u = -K x) with parameters off by {by:.0%}", title_justify="left")
     t.add_column("case")

@@ -11,24 +11,26 @@ import click
 from rich.console import Console
 from rich.table import Table
 
+from patchgen.design.lqg import design_on
 from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
-from patchgen.profiles.bench import load_bench
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.sheet import SheetSection
+from patchgen.studies.bench_sheet import predicted_patch_files
 from patchgen.swingup.manoeuvre import manoeuvre, plot_manoeuvre
 from patchgen.swingup.output import compact_schedule_rows, patch_sheet_rows, write_outputs
 from patchgen.swingup.run import compare_strategies
 from patchgen.swingup.strategies import STRATEGIES
 
 from . import cli
-from .design import design_from_path
+from .inputs import load_inputs
 from .options import SEED, FiniteFloat
-from .patch import PATCH_FILES, patch_files
 
 SWINGUP_FILES = PATCH_FILES + ("swingup-history.csv", "swingup-switching.csv", "swingup-switching.md", "swingup.png",
                                "swingup.svg", "manoeuvre.png", "manoeuvre.svg", "manoeuvre.json")
+SHEET_HOLD_RUNS = 10  # seeds of the sheet's 120 s hold: fewer than patchgen patch's, as the manoeuvre runs too
 
 
 @cli.command("swingup")
@@ -54,9 +56,9 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg
     noise, drift)."""
     check_out_dir(out_dir, SWINGUP_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one computes
-    d, machine = design_from_path(spec)
+    sp, machine, bench = load_inputs(spec)
+    d = design_on(sp, machine, bench)
     net = build_patch(d, machine)
-    bench = load_bench(d.spec.bench, d.spec.path)
     plant = plant_params(d.spec)
     F = force_limit or bench.actuator.force_limit_N
     m = manoeuvre(net, plant, bench, machine, d.K[:, :4], strategy, F, hold_s, seed)
@@ -76,7 +78,7 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg
         title = (f"{d.spec.name}: {strategy} pump-up, hand-off at {p.handoff_time or float('nan'):.2f} s, "
                  "patched hold")
         job = plot_helper.submit(pump_and_manoeuvre_files, p, m, tmp, title, svg)
-        files = patch_files(d, machine, net, extra_sections=[section], runs_hold=10)
+        files = predicted_patch_files(d, machine, bench, net, [section], runs_hold=SHEET_HOLD_RUNS)
         for path in job.result():
             files[path.name] = path.read_bytes()
     if m.sensitivity is not None:

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from patchgen.design.lqg import Controller
+from patchgen.design.controller import Controller
 from patchgen.design.model import LinearModel
 from patchgen.inputs.spec import DesignSpec
 from patchgen.profiles.bench import BenchProfile
@@ -46,6 +46,7 @@ from patchgen.profiles.bench import BenchProfile
 ROLLOFF_GRID_S = np.logspace(-3, 0, 61)  # differentiator roll-off candidates, s
 POLE_GRID = np.logspace(0, 3, 61)  # observer pole candidates, rad/s
 MIN_PM_DEG = 30.0  # the least phase margin a chosen estimator may leave the loop
+DECAY_TOL = 1e-9  # 1/s: the noisy loop's slowest mode must decay at least this fast to have a variance
 
 
 @dataclass(frozen=True)
@@ -59,20 +60,37 @@ class NoiseModel:
 
 @dataclass(frozen=True)
 class CornerChoice:
+    """The chosen roll-off (s) or pole (rad/s), its predicted force error (N), the grid's size."""
+
     value: float
     force_error_rms_N: float
     tried: int
 
 
 def noise_model(spec: DesignSpec, bench: BenchProfile, model: LinearModel) -> NoiseModel:
+    """The bench's sensor noise (in SI units, through the spec's sensor constants) and dead zone.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        Gives the sensor constants (V per SI unit).
+    bench : BenchProfile
+        Gives the sensor noise rms and bandwidth and the actuator's dead zone.
+    model : LinearModel
+        Gives the measured outputs, in order.
+
+    Returns
+    -------
+    NoiseModel
+        What :func:`force_error_rms` drives the loop with.
+    """
     ks = {"s": spec.sensors.s, "theta": spec.sensors.theta, "s_dot": spec.sensors.s_dot}
     rms = np.array([bench.sensors.noise_V_rms.get(m, 0.0) / ks[m] for m in model.measured])
-    return NoiseModel(rms, 2 * math.pi * bench.sensors.noise_bandwidth_Hz,
-                      bench.actuator.K_U * bench.actuator.dead_zone_V / math.sqrt(3.0))
+    dead_zone_rms = bench.actuator.K_U * bench.actuator.dead_zone_V / math.sqrt(3.0)  # uniform over +/-delta
+    return NoiseModel(rms, 2 * math.pi * bench.sensors.noise_bandwidth_Hz, dead_zone_rms)
 
 
-def force_error_rms(model: LinearModel, K: np.ndarray, ctl: Controller, noise: NoiseModel,
-                    Q: np.ndarray | None = None, R: np.ndarray | None = None) -> float:
+def force_error_rms(model: LinearModel, K: np.ndarray, ctl: Controller, noise: NoiseModel) -> float:
     """Predicted rms of u - u_ideal (N) in the noisy linear loop; inf when the loop is unstable."""
     keep = [i for i, s in enumerate(model.states) if not s.startswith("int_")]
     Ap, Bp, Cp = model.A[np.ix_(keep, keep)], model.B[keep], model.C[:, keep]
@@ -95,7 +113,7 @@ def force_error_rms(model: LinearModel, K: np.ndarray, ctl: Controller, noise: N
     wb = noise.bandwidth
     A[iN, iN] = -wb * np.eye(ny)
     A[iD, iD] = -wb
-    if np.max(np.linalg.eigvals(A).real) >= -1e-9:
+    if np.max(np.linalg.eigvals(A).real) >= -DECAY_TOL:
         return math.inf
     # first-order shaping: intensity 2 sigma^2 / wb gives variance sigma^2
     Gd = np.zeros(N)
@@ -112,22 +130,6 @@ def force_error_rms(model: LinearModel, K: np.ndarray, ctl: Controller, noise: N
     e[ix] = (ctl.Dc @ Cp + Kp)[0]
     e[ic] = (ctl.Cc + Ki)[0]
     e[iN] = ctl.Dc[0]
-    if Q is not None:
-        Sx = np.zeros((n + len([1 for s_ in ctl.states if s_.startswith("int_")]), N))
-        Sx[:n, ix] = np.eye(n)
-        k = n
-        qi = keep[:]
-        for j, name in enumerate(ctl.states):
-            if name.startswith("int_"):
-                Sx[k, n + j] = 1.0
-                qi.append(model.index(name))
-                k += 1
-        Qx = Q[np.ix_(qi, qi)]
-        cu = np.zeros(N)
-        cu[ix] = (ctl.Dc @ Cp)[0]
-        cu[ic] = ctl.Cc[0]
-        cu[iN] = ctl.Dc[0]
-        return float(np.trace(Sx.T @ Qx @ Sx @ X) + R[0, 0] * cu @ X @ cu)
     return float(math.sqrt(max(e @ X @ e, 0.0)))
 
 

@@ -6,54 +6,37 @@ plant and actuator states; integral states come from integrators of the measured
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
 
+from patchgen.design import corner
+from patchgen.design.controller import Controller, Estimator, RhoTry, integrator_part
 from patchgen.design.margins import Margins, loop_margins
 from patchgen.design.model import LinearModel, build_model, open_loop_poles, plant_zeros
 from patchgen.design.numerics import failing_as
+from patchgen.design.observer import ObserverError, reduced_observer, reduced_observer_controller
 from patchgen.inputs.spec import DesignSpec, q_matrix, r_matrix
 from patchgen.plant.equations import PlantParams
+from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
 
-
-@dataclass(frozen=True)
-class Controller:
-    """A linear controller from measured y (s, theta, s_dot; SI) to force u: xc' = Ac xc + Bc y,
-    u = Cc xc + Dc y. Its states are named."""
-
-    states: tuple[str, ...]
-    Ac: np.ndarray
-    Bc: np.ndarray
-    Cc: np.ndarray
-    Dc: np.ndarray
-
-
-@dataclass(frozen=True)
-class RhoTry:
-    rho: float
-    margins: Margins
-    accepted: bool
-
-
-@dataclass(frozen=True)
-class Estimator:
-    kind: str  # "kalman", "differentiator", "filtered_differentiator" or "reduced_observer"
-    states: tuple[str, ...]
-    L: np.ndarray | None  # n x m Kalman gain (kalman)
-    poles: np.ndarray
-    rho: float | None
-    rho_tries: list[RhoTry] = field(default_factory=list)
-    margins_rho1: Margins | None = None  # LQG before recovery (rho = 1)
-    rolloff_s: float | None = None
-    observer: object | None = None  # reduced_observer: patchgen.design.observer.ReducedObserver
-    chosen_from_noise: bool = False  # roll-off or pole chosen by patchgen.design.corner's rule
-    force_error_rms_N: float | None = None  # that rule's predicted figure
+# rho = "auto" stops at the first rho whose loop margins are this close to the LQR loop's
+# (docs/spec.md, estimator.rho): "recovered" to within what the margin figures are quoted to.
+LTR_GM_TOLERANCE_DB = 1.0  # each gain limit within 1 dB
+LTR_PM_TOLERANCE_DEG = 5.0  # phase margin within 5 deg
+RHO_STEP = 10.0  # rho = 1, 10, 100, ...: powers of ten (docs/spec.md; the thesis's case 1 lands on 1e7)
+RHO_MAX_SLACK = 1e-9  # relative: rho_max = 1e7 still admits 10^7 computed as a float power
+STABLE_TOL = 1e-12  # a mode with real part above -1e-12 1/s counts as not decaying (rounding)
+RANK_TOL = 1e-9  # the PBH rank test's singular-value cut-off for "the input cannot move this mode"
 
 
 @dataclass(frozen=True)
 class Design:
+    """A spec's design: the model, the LQR weights, gain and Riccati solution, poles, zeros,
+    the estimator and the controller it gives, and the loop margins with and without it."""
+
     spec: DesignSpec
     model: LinearModel
     Q: np.ndarray
@@ -70,16 +53,18 @@ class Design:
 
     @property
     def states(self) -> tuple[str, ...]:
+        """The design model's states, in K's order."""
         return self.model.states
 
     def gain(self, state: str) -> float:
+        """The LQR gain on one named state (u = -K x)."""
         return float(self.K[0, self.model.index(state)])
 
 
 def _stabilisable(A, B) -> bool:
     n = A.shape[0]
     for lam in np.linalg.eigvals(A):
-        if lam.real >= -1e-12 and np.linalg.matrix_rank(np.hstack([lam * np.eye(n) - A, B]), tol=1e-9) < n:
+        if lam.real >= -STABLE_TOL and np.linalg.matrix_rank(np.hstack([lam * np.eye(n) - A, B]), tol=RANK_TOL) < n:
             return False
     return True
 
@@ -146,23 +131,13 @@ def kalman_gain(spec: DesignSpec, model: LinearModel, rho: float) -> np.ndarray:
     return L
 
 
-def _integrator_part(model: LinearModel, K: np.ndarray):
-    """Integral states: their A block, input matrix from y, and their gains."""
-    idx = [i for i, s in enumerate(model.states) if s.startswith("int_")]
-    names = tuple(model.states[i] for i in idx)
-    Ai = model.A[np.ix_(idx, idx)]
-    Ei = np.zeros((len(idx), len(model.measured)))
-    for r, i in enumerate(idx):
-        Ei[r] = model.A[i, :][[model.index(m) for m in model.measured]]
-    return names, Ai, Ei, K[:, idx]
-
-
 def kalman_controller(model: LinearModel, K: np.ndarray, L: np.ndarray) -> Controller:
     """LQG compensator (A - B K - L C for the estimated states) plus the integrators of y."""
     est = model.estimated
     Ae, Be, Ce = model.submodel(est)
     Ke = K[:, [model.index(s) for s in est]]
-    inames, Ai, Ei, Ki = _integrator_part(model, K)
+    ip = integrator_part(model, K)
+    inames, Ai, Ei, Ki = ip.names, ip.Ai, ip.Ei, ip.Ki
     ne, ni = len(est), len(inames)
     Ac = np.zeros((ne + ni, ne + ni))
     Ac[:ne, :ne] = Ae - Be @ Ke - L @ Ce
@@ -180,7 +155,8 @@ def differentiator_controller(model: LinearModel, K: np.ndarray, rolloff: float)
     (if any) from a model of the actuator driven by the commanded force."""
     my = list(model.measured)
     names: list[str] = ["dfilt_theta"]
-    inames, Ai, Ei, Ki = _integrator_part(model, K)
+    ip = integrator_part(model, K)
+    inames, Ai, Ei, Ki = ip.names, ip.Ai, ip.Ei, ip.Ki
     names += list(inames)
     has_act = "actuator" in model.states
     if has_act:
@@ -228,15 +204,44 @@ def loop_with_controller(model: LinearModel, ctl: Controller):
 
 
 def _close_enough(lqg: Margins, lqr: Margins) -> bool:
+    """Loop transfer recovery has recovered the LQR loop: gain limits and phase margin within the
+    LTR tolerances (the same gain limits present)."""
     if not lqg.stable or lqg.pm_deg is None or lqr.pm_deg is None:
         return False
     gm_ok = (lqg.lower_gm_db is None) == (lqr.lower_gm_db is None) and (
-        lqr.lower_gm_db is None or abs(lqg.lower_gm_db - lqr.lower_gm_db) <= 1.0)
-    return gm_ok and abs(lqg.pm_deg - lqr.pm_deg) <= 5.0
+        lqr.lower_gm_db is None or abs(lqg.lower_gm_db - lqr.lower_gm_db) <= LTR_GM_TOLERANCE_DB)
+    return gm_ok and abs(lqg.pm_deg - lqr.pm_deg) <= LTR_PM_TOLERANCE_DEG
 
 
-def design(spec: DesignSpec, plant: PlantParams | None = None, default_rolloff_s: float | None = None) -> Design:
-    """Run the whole design for a spec (optionally on a perturbed plant, for sweeps)."""
+def design(spec: DesignSpec, bench: BenchProfile | None = None, *, plant: PlantParams | None = None,
+           default_rolloff_s: float | None = None) -> Design:
+    """Run the whole design of a spec: LQR gain, estimator, compensator and loop margins.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The loaded spec.
+    bench : BenchProfile, optional
+        The bench the spec names, loaded by the caller. A filtered differentiator or a reduced
+        observer needs it (its speed and force-error figure come from the bench's noise); other
+        estimators do not read it.
+    plant : PlantParams, optional
+        A perturbed plant to design for (sweeps); by default the spec's.
+    default_rolloff_s : float, optional
+        The differentiator roll-off when the spec gives none (the machine profile's).
+
+    Returns
+    -------
+    Design
+        Gains, poles, zeros, margins, estimator and controller; u = -K x.
+
+    Raises
+    ------
+    InputError
+        A spec the design cannot meet, naming the field behind it.
+    ValueError
+        A filtered differentiator or reduced observer without a bench profile.
+    """
     model = build_model(spec, plant)
     with failing_as(spec.path, "weights", "the LQR design"):
         Q, R, K, S = lqr(spec, model)
@@ -244,99 +249,131 @@ def design(spec: DesignSpec, plant: PlantParams | None = None, default_rolloff_s
         lqr_m = loop_margins(model.A, model.B, K)
         zeros = {"s/F_U": plant_zeros(spec, "s"), "s_dot/F_U": plant_zeros(spec, "s_dot")}
     with failing_as(spec.path, "estimator", f"the {spec.estimator.kind} estimator"):
-        est, ctl, lqg_m = _estimator(spec, model, K, lqr_m, default_rolloff_s)
-    return Design(spec, model, Q, R, K, S, _sort(cl), open_loop_poles(model), zeros, lqr_m, est, ctl, lqg_m)
+        est, ctl, lqg_m = _estimator(spec, bench, model, K, lqr_m, default_rolloff_s)
+    return Design(spec=spec, model=model, Q=Q, R=R, K=K, S=S, closed_loop_poles=_sort(cl),
+                  open_loop_poles=open_loop_poles(model), zeros=zeros, lqr_margins=lqr_m, estimator=est,
+                  controller=ctl, lqg_margins=lqg_m)
 
 
-def _estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray, lqr_m: Margins,
+def design_on(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile | None, *,
+              plant: PlantParams | None = None) -> Design:
+    """The design of a spec for the machine and bench it is patched on and tested against.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The loaded spec.
+    machine : MachineProfile
+        Gives the differentiator roll-off when the spec has none.
+    bench : BenchProfile or None
+        Gives the noise a filtered differentiator or reduced observer is shaped for (None only
+        for the estimators that do not read it, as in :func:`design`).
+    plant : PlantParams, optional
+        A perturbed plant to design for (sweeps).
+
+    Returns
+    -------
+    Design
+        As ``patchgen design SPEC`` computes it.
+    """
+    return design(spec, bench, plant=plant, default_rolloff_s=machine.imperfections.differentiator_rolloff_s)
+
+
+def _estimator(spec: DesignSpec, bench: BenchProfile | None, model: LinearModel, K: np.ndarray, lqr_m: Margins,
                default_rolloff_s: float | None) -> tuple[Estimator | None, Controller | None, Margins | None]:
     """The spec's estimator, its controller and the loop margins with it (none: all None)."""
-    est = ctl = None
-    lqg_m = None
     e = spec.estimator
     if e.kind == "kalman":
-        tries: list[RhoTry] = []
-        L1 = kalman_gain(spec, model, 1.0)
-        m1 = loop_margins(*loop_with_controller(model, kalman_controller(model, K, L1)))
-        if e.rho == "auto":
-            rho, L, m = 1.0, L1, m1
-            k = 0
-            while True:
-                ok = _close_enough(m, lqr_m)
-                tries.append(RhoTry(rho, m, ok))
-                if ok or rho * 10 > e.rho_max * (1 + 1e-9):
-                    break
-                k += 1
-                rho = 10.0 ** k
-                L = kalman_gain(spec, model, rho)
-                m = loop_margins(*loop_with_controller(model, kalman_controller(model, K, L)))
-        else:
-            rho = float(e.rho)
-            L = kalman_gain(spec, model, rho)
-            m = loop_margins(*loop_with_controller(model, kalman_controller(model, K, L)))
-            tries.append(RhoTry(rho, m, _close_enough(m, lqr_m)))
-        Ae, _, Ce = model.submodel(model.estimated)
-        ctl = kalman_controller(model, K, L)
-        est = Estimator("kalman", model.estimated, L, _sort(np.linalg.eigvals(Ae - L @ Ce)), rho, tries, m1)
-        lqg_m = m
-    elif e.kind == "differentiator":
+        return _kalman_estimator(spec, model, K, lqr_m)
+    if e.kind == "differentiator":
         roll = e.rolloff_s or default_rolloff_s
         if roll is None:
             raise spec.error("estimator.rolloff_s", "missing field (no machine default either)")
         ctl = differentiator_controller(model, K, roll)
-        lqg_m = loop_margins(*loop_with_controller(model, ctl))
-        est = Estimator("differentiator", ("theta_dot",), None, np.array([-1.0 / roll + 0j]), None, [], None, roll)
-    elif e.kind in ("filtered_differentiator", "reduced_observer"):
-        est, ctl = _noise_shaped_estimator(spec, model, K)
-        lqg_m = loop_margins(*loop_with_controller(model, ctl))
-    return est, ctl, lqg_m
+        est = Estimator(kind="differentiator", states=("theta_dot",), L=None, poles=np.array([-1.0 / roll + 0j]),
+                        rolloff_s=roll)
+        return est, ctl, loop_margins(*loop_with_controller(model, ctl))
+    if e.kind in ("filtered_differentiator", "reduced_observer"):
+        if bench is None:
+            raise ValueError(f"{spec.name}: a {e.kind} estimator is shaped for the bench's noise; pass the bench "
+                             f"profile the spec names ({spec.bench!r}, patchgen.profiles.bench.load_bench)")
+        est, ctl = _noise_shaped_estimator(spec, bench, model, K)
+        return est, ctl, loop_margins(*loop_with_controller(model, ctl))
+    return None, None, None
 
 
-def _noise_shaped_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray):
+def _kalman_margins(spec: DesignSpec, model: LinearModel, K: np.ndarray, rho: float):
+    """The Kalman gain at ``rho`` and the loop margins of its compensator."""
+    L = kalman_gain(spec, model, rho)
+    return L, loop_margins(*loop_with_controller(model, kalman_controller(model, K, L)))
+
+
+def _kalman_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray, lqr_m: Margins):
+    """The Kalman estimator after loop transfer recovery: rho from the spec, or the first power
+    of RHO_STEP whose loop is close enough to the LQR loop (up to the spec's rho_max)."""
+    e = spec.estimator
+    tries: list[RhoTry] = []
+    L1, m1 = _kalman_margins(spec, model, K, 1.0)
+    if e.rho == "auto":
+        rho, L, m = 1.0, L1, m1
+        k = 0
+        while True:
+            ok = _close_enough(m, lqr_m)
+            tries.append(RhoTry(rho=rho, margins=m, accepted=ok))
+            if ok or rho * RHO_STEP > e.rho_max * (1 + RHO_MAX_SLACK):
+                break
+            k += 1
+            rho = RHO_STEP ** k
+            L, m = _kalman_margins(spec, model, K, rho)
+    else:
+        rho = float(e.rho)
+        L, m = _kalman_margins(spec, model, K, rho)
+        tries.append(RhoTry(rho=rho, margins=m, accepted=_close_enough(m, lqr_m)))
+    Ae, _, Ce = model.submodel(model.estimated)
+    est = Estimator(kind="kalman", states=model.estimated, L=L, poles=_sort(np.linalg.eigvals(Ae - L @ Ce)),
+                    rho=rho, rho_tries=tries, margins_rho1=m1)
+    return est, kalman_controller(model, K, L), m
+
+
+def _noise_shaped_estimator(spec: DesignSpec, bench: BenchProfile, model: LinearModel, K: np.ndarray):
     """A filtered differentiator or a reduced observer, its speed from the spec or, when the spec
     leaves it out, from the bench's noise levels (patchgen.design.corner)."""
-    from patchgen.design import corner
-    from patchgen.design.observer import ObserverError, reduced_observer, reduced_observer_controller
-    from patchgen.profiles.bench import load_bench
-
     e = spec.estimator
     fixed = e.rolloff_s if e.kind == "filtered_differentiator" else e.observer_pole
-    choice = None
     if e.kind == "filtered_differentiator":
         build = lambda r: differentiator_controller(model, K, r)
         grid = corner.ROLLOFF_GRID_S
     else:
         build = lambda p: reduced_observer_controller(model, K, reduced_observer(model, p))
         grid = corner.POLE_GRID
-    noise = corner.noise_model(spec, load_bench(spec.bench, spec.path), model)
+    noise = corner.noise_model(spec, bench, model)
     if fixed is None:
         try:
             def robust(c):
                 mg = loop_margins(*loop_with_controller(model, c), gain_limits=False)
                 return mg.stable and mg.pm_deg is not None and mg.pm_deg >= corner.MIN_PM_DEG
 
-            choice = corner.choose(model, K, build, noise, grid, robust)
+            value = corner.choose(model, K, build, noise, grid, robust).value
         except ValueError as exc:
             raise spec.error("estimator", str(exc)) from None
-        value = choice.value
     else:
         value = float(fixed)
     try:
         ctl = build(value)
     except ObserverError as exc:
         raise spec.error("estimator.observer_pole", str(exc)) from None
-    err = corner.force_error_rms(model, K, ctl, noise)
+    chosen = dict(chosen_from_noise=fixed is None, force_error_rms_N=corner.force_error_rms(model, K, ctl, noise))
     if e.kind == "filtered_differentiator":
-        est = Estimator(e.kind, ("theta_dot",), None, np.array([-1.0 / value + 0j]), None, [], None, value,
-                        None, fixed is None, err)
+        est = Estimator(kind=e.kind, states=("theta_dot",), L=None, poles=np.array([-1.0 / value + 0j]),
+                        rolloff_s=value, **chosen)
     else:
         obs = reduced_observer(model, value)
-        est = Estimator(e.kind, obs.unmeasured, obs.Lr, _sort(np.linalg.eigvals(obs.F)), None, [], None, None,
-                        obs, fixed is None, err)
+        est = Estimator(kind=e.kind, states=obs.unmeasured, L=obs.Lr, poles=_sort(np.linalg.eigvals(obs.F)),
+                        observer=obs, **chosen)
     return est, ctl
 
 
 def _sort(v):
+    """Eigenvalues in a fixed order: by real part, then imaginary part."""
     v = np.asarray(v, dtype=complex)
     return v[np.lexsort((v.imag, v.real))]
-

@@ -27,7 +27,8 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from patchgen.design.lqg import Controller, Design, design, loop_with_controller
+from patchgen.design.controller import Controller
+from patchgen.design.lqg import Design, design_on, loop_with_controller
 from patchgen.inputs.spec import DesignSpec, load_spec
 
 if TYPE_CHECKING:  # pragma: no cover - for annotations only
@@ -218,8 +219,10 @@ def load_design(spec: str | Path | DesignSpec, *, rho: float | None = None) -> D
     -------
     Design
         As ``patchgen design SPEC`` computes it: a differentiator without a roll-off of its own
-        takes the machine profile's.
+        takes the machine profile's, a filtered differentiator or a reduced observer is shaped
+        for the noise of the bench profile the spec names.
     """
+    from patchgen.profiles.bench import load_bench
     from patchgen.profiles.machine import load_machine
 
     if not isinstance(spec, DesignSpec):
@@ -230,5 +233,4 @@ def load_design(spec: str | Path | DesignSpec, *, rho: float | None = None) -> D
         if not rho > 0:
             raise ValueError(f"rho must be positive (got {rho!r})")
         spec = spec.model_copy(update={"estimator": spec.estimator.model_copy(update={"rho": float(rho)})})
-    machine = load_machine(spec.machine, spec.path)
-    return design(spec, default_rolloff_s=machine.imperfections.differentiator_rolloff_s)
+    return design_on(spec, load_machine(spec.machine, spec.path), load_bench(spec.bench, spec.path))

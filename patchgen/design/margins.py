@@ -14,11 +14,18 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-_W_GRID = np.logspace(-5, 5, 6001)
+_W_GRID = np.logspace(-5, 5, 6001)  # rad/s: every crossover of a cart-pendulum loop, 600 points a decade
+MODAL_COND_MAX = 1e8  # eigenvector conditioning up to which the modal frequency response is accurate
+DECAY_TOL = 1e-9  # 1/s: a closed-loop pole must lie this far left of the axis to count as stable
+DC_W = 1e-9  # rad/s: the frequency standing in for w -> 0 (below every pole and zero of the loop)
+REAL_TOL = 1e-6  # relative: T(DC_W) this close to the real axis is a phase crossover at w = 0
+EDGE_STEP = 1e-3  # relative: a gain limit is real when the gain this far past it is unstable
 
 
 @dataclass(frozen=True)
 class Margins:
+    """The loop margins at the plant input: gain limits (factors), phase and delay margins."""
+
     stable: bool
     lower_gm: float | None  # factor (< 1), None if gain may go to zero
     upper_gm: float | None  # factor (> 1), None if infinite
@@ -30,13 +37,16 @@ class Margins:
 
     @property
     def lower_gm_db(self) -> float | None:
+        """The lower gain limit in dB (negative), None when the gain may fall to zero."""
         return None if self.lower_gm is None else 20 * math.log10(self.lower_gm)
 
     @property
     def upper_gm_db(self) -> float | None:
+        """The upper gain limit in dB, None when infinite."""
         return None if self.upper_gm is None else 20 * math.log10(self.upper_gm)
 
     def as_dict(self) -> dict:
+        """Every field and the limits in dB, as plain values."""
         d = asdict(self)
         d["lower_gm_db"] = self.lower_gm_db
         d["upper_gm_db"] = self.upper_gm_db
@@ -47,7 +57,7 @@ def _freqresp(A, B, C, w: np.ndarray) -> np.ndarray:
     """C (jw I - A)^-1 B: in modal form when A is well diagonalisable (O(n) per frequency),
     else by a linear solve per frequency."""
     lam, V = np.linalg.eig(A)
-    if np.linalg.cond(V) < 1e8:
+    if np.linalg.cond(V) < MODAL_COND_MAX:
         c = (C @ V)[0]
         b = np.linalg.solve(V, B)[:, 0]
         return (c * b) @ (1.0 / (1j * w[None, :] - lam[:, None]))
@@ -58,7 +68,7 @@ def _freqresp(A, B, C, w: np.ndarray) -> np.ndarray:
 
 
 def _stable(A, B, C, k: float) -> bool:
-    return bool(np.max(np.linalg.eigvals(A - k * B @ C).real) < -1e-9)
+    return bool(np.max(np.linalg.eigvals(A - k * B @ C).real) < -DECAY_TOL)
 
 
 def _roots(fun, w: np.ndarray, vals: np.ndarray) -> list[float]:
@@ -82,8 +92,8 @@ def _gain_limits(A, B, C, T, Tw, stable: bool):
     # phase crossovers: Im T = 0 with Re T < 0; also w -> 0
     phase_x = [x for x in _roots(lambda v: T(v).imag, w, Tw.imag) if T(np.array([x]))[0].real < 0]
     ks = [-1.0 / T(np.array([x]))[0].real for x in phase_x]
-    t0 = _freqresp(A, B, C, np.array([1e-9]))[0]
-    if abs(t0.imag) < 1e-6 * max(1.0, abs(t0)) and t0.real < 0:
+    t0 = _freqresp(A, B, C, np.array([DC_W]))[0]
+    if abs(t0.imag) < REAL_TOL * max(1.0, abs(t0)) and t0.real < 0:
         ks.append(-1.0 / t0.real)
     # a real closed-loop pole through the origin: det(A - k B C) = 0
     ks = sorted(k for k in set(ks) if k > 0 and np.isfinite(k))
@@ -96,10 +106,10 @@ def _gain_limits(A, B, C, T, Tw, stable: bool):
                 upper = hi if np.isfinite(hi) else None
                 break
         # confirm the interval edges are real stability boundaries (merge spurious ones)
-        while lower is not None and _stable(A, B, C, lower * 0.999):
+        while lower is not None and _stable(A, B, C, lower * (1 - EDGE_STEP)):
             below = [k for k in ks if k < lower]
             lower = below[-1] if below else None
-        while upper is not None and _stable(A, B, C, upper * 1.001):
+        while upper is not None and _stable(A, B, C, upper * (1 + EDGE_STEP)):
             above = [k for k in ks if k > upper]
             upper = above[0] if above else None
     return lower, upper, phase_x

@@ -17,6 +17,8 @@ from patchgen.plant.equations import PlantParams, linear_matrices
 
 @dataclass(frozen=True)
 class LinearModel:
+    """The design model x' = A x + B u, y = C x, u the force command (N), states named."""
+
     states: tuple[str, ...]
     A: np.ndarray
     B: np.ndarray
@@ -26,6 +28,7 @@ class LinearModel:
     estimated: tuple[str, ...]  # states a Kalman estimator carries: plant + actuator
 
     def index(self, name: str) -> int:
+        """The position of a named state."""
         return self.states.index(name)
 
     def submodel(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -35,6 +38,7 @@ class LinearModel:
 
 
 def plant_params(spec: DesignSpec) -> PlantParams:
+    """The spec's plant figures as the plant equations take them."""
     p = spec.plant
     return PlantParams(M=p.M, m=p.m, l=p.l, g=p.g, b_VF=p.b_VF, c=p.c, d=p.d)
 
@@ -80,6 +84,7 @@ def build_model(spec: DesignSpec, plant: PlantParams | None = None) -> LinearMod
 
 
 def open_loop_poles(model: LinearModel) -> np.ndarray:
+    """Eigenvalues of the design model's A, sorted by real then imaginary part."""
     return _sorted(np.linalg.eigvals(model.A))
 
 

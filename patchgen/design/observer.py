@@ -22,25 +22,14 @@ family the others leave; its smallest real root is used.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import scipy.linalg as sla
 
-from patchgen.design.lqg import Controller, _integrator_part
+from patchgen.design.controller import Controller, ReducedObserver, integrator_part
 from patchgen.design.model import LinearModel
 
-
-@dataclass(frozen=True)
-class ReducedObserver:
-    """z' = F z + G y + H u (SI), w_hat = z + Lr y; states named by the w they estimate."""
-
-    unmeasured: tuple[str, ...]
-    Lr: np.ndarray  # n_w x n_y
-    F: np.ndarray
-    G: np.ndarray
-    H: np.ndarray  # n_w
-    pole: float
+FIT_TOL = 1e-9  # relative: the structure's linear conditions hold to rounding, and a root is real
+QUADRATIC_MIN = 1e-14  # below this leading coefficient the s_dot condition is linear in the free gain
 
 
 class ObserverError(ValueError):
@@ -48,6 +37,7 @@ class ObserverError(ValueError):
 
 
 def unmeasured_states(model: LinearModel) -> tuple[str, ...]:
+    """The estimated states the sensors do not measure (theta_dot, and the actuator's)."""
     return tuple(s for s in model.estimated if s not in model.measured)
 
 
@@ -81,7 +71,7 @@ def reduced_observer(model: LinearModel, pole: float) -> ReducedObserver:
     rhs = np.array([v - base[rc] for rc, v in want])
     p0 = np.linalg.lstsq(M, rhs, rcond=None)[0]
     null = sla.null_space(M)
-    if null.shape[1] != 1 or not np.allclose(M @ p0, rhs, atol=1e-9 * max(1.0, pole)):
+    if null.shape[1] != 1 or not np.allclose(M @ p0, rhs, atol=FIT_TOL * max(1.0, pole)):
         raise ObserverError("the unmeasured states cannot be given the observer's structure")
     v = null[:, 0]
     it, iv = w.index("theta_dot"), y.index("s_dot")
@@ -94,8 +84,10 @@ def reduced_observer(model: LinearModel, pole: float) -> ReducedObserver:
     # g is quadratic in t: fit through three points, take the real root nearest zero
     ts = np.array([-1.0, 0.0, 1.0])
     coef = np.polyfit(ts, [g(t) for t in ts], 2)
-    roots = [r.real for r in np.roots(coef) if abs(r.imag) < 1e-9 * max(1.0, abs(r))] if abs(coef[0]) > 1e-14 \
-        else ([-coef[2] / coef[1]] if abs(coef[1]) > 0 else [])
+    if abs(coef[0]) > QUADRATIC_MIN:
+        roots = [r.real for r in np.roots(coef) if abs(r.imag) < FIT_TOL * max(1.0, abs(r))]
+    else:
+        roots = [-coef[2] / coef[1]] if abs(coef[1]) > 0 else []
     if not roots:
         raise ObserverError(f"no real observer gain keeps s_dot out of theta_dot at pole {pole:g} rad/s")
     t = min(roots, key=abs)
@@ -111,14 +103,14 @@ def reduced_observer_controller(model: LinearModel, K: np.ndarray, obs: ReducedO
     integral states; u = -(K_y + K_w Lr) y - K_w z - K_i x_i."""
     Ky = K[:, [model.index(s) for s in model.measured]]
     Kw = K[:, [model.index(s) for s in obs.unmeasured]]
-    inames, Ai, Ei, Ki = _integrator_part(model, K)
-    nw, ni = len(obs.unmeasured), len(inames)
-    Cc = -np.hstack([Kw, Ki])
+    ip = integrator_part(model, K)
+    nw, ni = len(obs.unmeasured), len(ip.names)
+    Cc = -np.hstack([Kw, ip.Ki])
     Dc = -(Ky + Kw @ obs.Lr)
     H = obs.H.reshape(-1, 1)
     Ac = np.zeros((nw + ni, nw + ni))
     Ac[:nw, :nw] = obs.F
     Ac[:nw] += H @ Cc
-    Ac[nw:, nw:] = Ai
-    Bc = np.vstack([obs.G + H @ Dc, Ei])
-    return Controller(tuple(f"z_{s}" for s in obs.unmeasured) + inames, Ac, Bc, Cc, Dc)
+    Ac[nw:, nw:] = ip.Ai
+    Bc = np.vstack([obs.G + H @ Dc, ip.Ei])
+    return Controller(tuple(f"z_{s}" for s in obs.unmeasured) + ip.names, Ac, Bc, Cc, Dc)

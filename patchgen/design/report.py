@@ -15,6 +15,7 @@ def _c(v: complex) -> list[float]:
 
 
 def margins_dict(m: Margins | None) -> dict | None:
+    """The margins as the design's JSON gives them (None stays None)."""
     if m is None:
         return None
     d = m.as_dict()
@@ -58,17 +59,21 @@ def design_dict(d: Design) -> dict:
     return out
 
 
+SMALL_POLE = 1e-3  # 1/s: a pole nearer the origin than this prints in significant digits, not four decimals
+REAL_POLE = 1e-9  # 1/s: an imaginary part below this is rounding; the pole prints as real
+
+
 def _f(x: float | None, fmt: str = ".4g") -> str:
     return "inf" if x is None else format(x, fmt)
 
 
 def _poles(ps) -> str:
     def num(x: float) -> str:
-        return f"{x:.4f}" if abs(x) >= 1e-3 or x == 0 else f"{x:.2g}"
+        return f"{x:.4f}" if abs(x) >= SMALL_POLE or x == 0 else f"{x:.2g}"
 
     out = []
     for p in ps:
-        if abs(p.imag) < 1e-9:
+        if abs(p.imag) < REAL_POLE:
             out.append(num(p.real))
         elif p.imag > 0:
             out.append(f"{num(p.real)} ± {p.imag:.4f}i")
@@ -76,6 +81,7 @@ def _poles(ps) -> str:
 
 
 def margins_table(rows: list[tuple[str, Margins | None]], title: str = "Loop margins at the plant input") -> Table:
+    """One row per named loop (those without margins left out) for the terminal."""
     t = Table(title=title, title_justify="left")
     for col in ("loop", "lower GM", "upper GM", "PM (deg)", "at (rad/s)", "delay margin (s)"):
         t.add_column(col, justify="right" if col != "loop" else "left")
@@ -92,6 +98,7 @@ def margins_table(rows: list[tuple[str, Margins | None]], title: str = "Loop mar
 
 
 def print_design(d: Design, console: Console) -> None:
+    """The design report on the terminal: gains, poles, zeros, estimator, margins."""
     spec = d.spec
     console.print(f"[bold]{spec.name}[/bold]  {spec.description}")
     if spec.source:

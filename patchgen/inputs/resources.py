@@ -21,6 +21,8 @@ FOLDERS = {
     "bench": "profiles/benches",
     "template": "templates",
 }
+# what `patchgen examples` copies out for a user to edit: kind -> sub-folder of the examples folder
+EXAMPLES = {"design": "designs", "scenario": "sims", "machine": "machines", "bench": "benches"}
 
 
 def folder(kind: str) -> Traversable:
@@ -31,6 +33,12 @@ def folder(kind: str) -> Traversable:
 def shipped(kind: str) -> list[str]:
     """Stems of the shipped TOML files of one kind, sorted."""
     return sorted(p.name[:-5] for p in folder(kind).iterdir() if p.name.endswith(".toml"))
+
+
+def example_files() -> dict[str, bytes]:
+    """Every shipped design, scenario and profile, keyed by its path under the examples folder."""
+    return {f"{sub}/{name}.toml": folder(kind).joinpath(f"{name}.toml").read_bytes()
+            for kind, sub in EXAMPLES.items() for name in shipped(kind)}
 
 
 def shipped_file(kind: str, name: str) -> Traversable:

@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from patchgen.bench.simulate import RunSummary, simulate
-from patchgen.design.lqg import Design, design
+from patchgen.design.lqg import Design, design_on
 from patchgen.design.model import plant_params
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
@@ -39,8 +39,20 @@ CANDIDATES = (
 )
 
 
+RUNS = 200  # noise seeds per candidate: the held fraction in steps of half a percent
+
+# Figures are rounded before ranking, so that noise in the last digits cannot reorder candidates.
+FRACTION_DIGITS = 6  # fraction of runs held: below one run in a million
+MARGIN_DIGITS = 1  # gain margin (dB) and phase margin (deg), as the table prints them
+SWING_DIGITS = 2  # worst amplifier swing (V), as the table prints it
+INFINITE_MARGIN = -1e9  # the rank figure of an infinite margin: ahead of every finite one
+
+
 @dataclass(frozen=True)
 class Candidate:
+    """One realisation of the estimator: its design, its patch (when it fits the machine) and,
+    once simulated, its bench figures."""
+
     label: str
     kind: str
     design: Design | None
@@ -66,28 +78,39 @@ class Candidate:
 
     @property
     def pm_deg(self) -> float | None:
+        """Phase margin of the patched loop, deg (None when the loop is unstable)."""
         m = self.design.lqg_margins if self.design is not None else None
         return None if m is None or not m.stable else m.pm_deg
 
     @property
     def amplifiers(self) -> int | None:
+        """Amplifiers the patch uses (None when it does not fit)."""
         return None if self.netlist is None else len(self.netlist.amplifiers)
 
     @property
     def pots(self) -> int | None:
+        """Pots the patch uses (None when it does not fit)."""
         return None if self.netlist is None else len(self.netlist.pots)
 
-    def rank_key(self, order: int):
+    def rank_key(self, order: int) -> tuple:
+        """Sort key, best first: simulated, runs held, fewer units, gain margin, phase margin,
+        smaller swing, then ``order`` (the candidate's place in CANDIDATES)."""
         if self.fraction_ok is None:
             return (1, 0.0, 0, 0.0, 0.0, 0.0, order)
-        r = lambda x, n: -round(x, n) if x is not None and math.isfinite(x) else (-1e9 if x else 0.0)
+        def r(x):  # larger margins first; none (unstable loop) after every margin
+            if x is not None and math.isfinite(x):
+                return -round(x, MARGIN_DIGITS)
+            return INFINITE_MARGIN if x else 0.0
+
         units = self.netlist.units if self.netlist is not None else 1
-        return (0, -round(self.fraction_ok, 6), units, r(self.gm_db, 1), r(self.pm_deg, 1),
-                round(self.worst_swing_V or 0.0, 2), order)
+        return (0, -round(self.fraction_ok, FRACTION_DIGITS), units, r(self.gm_db), r(self.pm_deg),
+                round(self.worst_swing_V or 0.0, SWING_DIGITS), order)
 
 
 @dataclass(frozen=True)
 class Recommendation:
+    """Every candidate, ranked, and the Monte Carlo they were ranked by."""
+
     spec: DesignSpec
     scenario: Scenario
     runs: int
@@ -96,6 +119,7 @@ class Recommendation:
 
     @property
     def best(self) -> Candidate | None:
+        """The first-ranked candidate, if it was simulated."""
         b = self.ranked[0] if self.ranked else None
         return b if b is not None and b.netlist is not None and b.fraction_ok is not None else None
 
@@ -112,32 +136,46 @@ def candidate_specs(spec: DesignSpec) -> list[tuple[str, str, DesignSpec]]:
     return out
 
 
-def prepare(spec: DesignSpec, machine: MachineProfile) -> list[Candidate]:
-    """Design and allocate every candidate; errors are kept, not raised."""
+def prepare(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile) -> list[Candidate]:
+    """Design and allocate every candidate; errors are kept, not raised.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The spec whose estimator is varied.
+    machine, bench : MachineProfile, BenchProfile
+        The machine each candidate is allocated on, the bench its estimator is shaped for.
+
+    Returns
+    -------
+    list of Candidate
+        In CANDIDATES order; one that does not design or fit keeps its one-line error.
+    """
     out = []
     for label, kind, sp in candidate_specs(spec):
         try:
-            d = design(sp, default_rolloff_s=machine.imperfections.differentiator_rolloff_s)
+            d = design_on(sp, machine, bench)
         except InputError as exc:
-            out.append(Candidate(label, kind, None, None, exc.message))
+            out.append(Candidate(label=label, kind=kind, design=None, netlist=None, error=exc.message))
             continue
         try:
             net = build_patch(d, machine, 1)
         except InputError as exc:
             if machine.max_units == 1:
-                out.append(Candidate(label, kind, d, None, exc.message))
+                out.append(Candidate(label=label, kind=kind, design=d, netlist=None, error=exc.message))
                 continue
             try:  # slaved units, as the machine allows
                 net = build_patch(d, machine, "auto")
                 label = f"{label} ({net.units} slaved units)"
             except InputError as exc2:
-                out.append(Candidate(label, kind, d, None, exc2.message))
+                out.append(Candidate(label=label, kind=kind, design=d, netlist=None, error=exc2.message))
                 continue
-        out.append(Candidate(label, kind, d, net, None, estimator_detail=_detail(d)))
+        out.append(Candidate(label=label, kind=kind, design=d, netlist=net, error=None, estimator_detail=_detail(d)))
     return out
 
 
 def _detail(d: Design) -> str:
+    """The estimator's setting in a few words, for the table."""
     e = d.estimator
     if e is None:
         return ""
@@ -151,7 +189,14 @@ def _detail(d: Design) -> str:
 
 def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenario: Scenario, runs: int,
              seed: int | None, progress: Callable[[int], None] | None = None) -> Candidate:
-    """Monte Carlo of one allocated candidate on the bench."""
+    """Monte Carlo of one allocated candidate on the bench.
+
+    Returns
+    -------
+    Candidate
+        ``c`` with its bench figures: runs held (no overload), fallen, tripped, overloaded,
+        worst swing (the rails when any run overloaded) and the runs themselves.
+    """
     res = simulate(c.netlist, plant_params(c.design.spec), bench, machine, scenario, seed=seed, runs=runs,
                    keep_history=True, progress=progress)
     D = res.distribution
@@ -160,79 +205,47 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
     swing = max([swing] + [r.max_abs_u_c_V for r in res.runs])
     if any(r.overloads for r in res.runs):
         swing = max(swing, machine.imperfections.saturation_V)
-    return Candidate(c.label, c.kind, c.design, c.netlist, None, runs, ok, D.fraction_fallen,
-                     D.fraction_tripped, D.fraction_overloaded, swing, c.estimator_detail, tuple(res.runs))
+    return replace(c, error=None, runs=runs, fraction_ok=ok, fraction_fallen=D.fraction_fallen,
+                   fraction_tripped=D.fraction_tripped, fraction_overloaded=D.fraction_overloaded,
+                   worst_swing_V=swing, results=tuple(res.runs))
 
 
 def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenario: Scenario,
-              runs: int = 200, seed: int | None = None,
-              progress: Callable[[str, int], None] | None = None) -> Recommendation:
-    """Design, allocate and simulate every candidate, and rank them."""
-    cands = prepare(spec, machine)
-    done = []
+              runs: int = RUNS, seed: int | None = None,
+              progress: Callable[[str, int, int], None] | None = None) -> Recommendation:
+    """Design, allocate and simulate every candidate, and rank them.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The spec whose estimator is varied.
+    machine, bench : MachineProfile, BenchProfile
+        The machine the patches are allocated on and the bench they are simulated on.
+    scenario : Scenario
+        The Monte Carlo's scenario.
+    runs : int
+        Noise seeds per candidate.
+    seed : int, optional
+        Base seed (default: the scenario's).
+    progress : callable, optional
+        Called as ``progress(label, done, total)`` while the Monte Carlo runs: the candidate
+        being simulated, the runs done and the runs to do over all candidates that fit.
+
+    Returns
+    -------
+    Recommendation
+        The candidates ranked best first (see the module's ranking).
+    """
+    cands = prepare(spec, machine, bench)
+    total = runs * sum(c.netlist is not None for c in cands)
+    done, base = [], 0
     for c in cands:
         if c.netlist is None:
             done.append(c)
             continue
-        cb = (lambda n, lab=c.label: progress(lab, n)) if progress else None
+        cb = (lambda n, lab=c.label, b=base: progress(lab, b + n, total)) if progress else None
         done.append(evaluate(c, bench, machine, scenario, runs, seed, cb))
+        base += runs
     order = {c.label: i for i, c in enumerate(done)}
     ranked = tuple(sorted(done, key=lambda c: c.rank_key(order[c.label])))
     return Recommendation(spec, scenario, runs, scenario.seed if seed is None else seed, ranked)
-
-
-def table_rows(rec: Recommendation) -> list[dict]:
-    """One plain row per candidate, ranked (for the terminal, the sheet and --json)."""
-    rows = []
-    for i, c in enumerate(rec.ranked, 1):
-        m = c.design.lqg_margins if c.design is not None else None
-        rows.append({
-            "rank": i if c.fraction_ok is not None else None,
-            "realisation": c.label,
-            "estimator": c.estimator_detail,
-            "fraction_ok": c.fraction_ok,
-            "fraction_fallen": c.fraction_fallen,
-            "fraction_tripped": c.fraction_tripped,
-            "fraction_overloaded": c.fraction_overloaded,
-            "lower_gm_db": None if m is None or not m.stable else m.lower_gm_db,
-            "upper_gm_db": None if m is None or not m.stable else m.upper_gm_db,
-            "pm_deg": c.pm_deg,
-            "loop_stable": None if m is None else m.stable,
-            "worst_swing_V": c.worst_swing_V,
-            "amplifiers": c.amplifiers,
-            "pots": c.pots,
-            "error": c.error,
-        })
-    return rows
-
-
-def _f(x, fmt: str, none: str = "-") -> str:
-    return none if x is None else (fmt.format(x) if math.isfinite(x) else "inf")
-
-
-def table_markdown(rec: Recommendation, reference_V: float) -> str:
-    """The comparison as a Markdown section body: why the first row was chosen."""
-    head = ("| rank | realisation | estimator | held (of runs) | fallen | tripped | overloaded | "
-            "GM lower / upper (dB) | PM (deg) | worst swing (V) | amps / pots |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|\n")
-    lines = []
-    for r in table_rows(rec):
-        if r["error"]:
-            lines.append(f"| - | {r['realisation']} | {r['estimator']} | not simulated: {r['error']} "
-                         "| | | | | | | |")
-            continue
-        lines.append(
-            f"| {r['rank']} | {r['realisation']} | {r['estimator']} | {r['fraction_ok']:.1%} | "
-            f"{r['fraction_fallen']:.1%} | {r['fraction_tripped']:.1%} | {r['fraction_overloaded']:.1%} | "
-            f"{_f(r['lower_gm_db'], '{:+.1f}', 'none')} / {_f(r['upper_gm_db'], '{:+.1f}', 'inf')} | "
-            f"{_f(r['pm_deg'], '{:.1f}')} | {r['worst_swing_V']:.2f} of {reference_V:g} | "
-            f"{r['amplifiers']} / {r['pots']} |")
-    best = rec.best
-    intro = (f"Each way of getting theta_dot (and the actuator state) that fits the machine was designed, "
-             f"allocated and simulated on the bench ({rec.scenario.name}: {rec.scenario.description}), "
-             f"{rec.runs} noise seeds from seed {rec.seed}, with the bench actuator, sensor noise and "
-             "integrator drift. 'held' counts runs where the pendulum stayed up, the cart stayed inside "
-             "the limit switches and no amplifier left the rails for the whole scenario. Ranked by that, "
-             "then by the loop's gain margin (nearer limit), phase margin, and worst amplifier swing.\n\n")
-    tail = f"\nChosen: **{best.label}**.\n" if best else "\nNo candidate could be simulated.\n"
-    return intro + head + "\n".join(lines) + "\n" + tail

@@ -7,19 +7,23 @@ from __future__ import annotations
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
-from patchgen.design.lqg import design
+from patchgen.design.lqg import design_on
 from patchgen.design.margins import Margins
 from patchgen.design.model import plant_params
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.build import build_patch
+from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
-VARIABLE = ("M", "m", "l", "b_VF", "c", "g")
+VARIABLE = ("M", "m", "l", "b_VF", "c", "g")  # the plant parameters a sweep may vary (PlantParams.scaled)
+PARALLEL_FROM = 4  # rows from which a process pool pays for its start-up
 
 
 @dataclass(frozen=True)
 class SweepRow:
+    """One perturbed plant: its gains and margins, the pots that move, and how the nominal patch does."""
+
     label: str
     factors: dict[str, float]
     K: list[float]
@@ -29,26 +33,15 @@ class SweepRow:
     patch_error: str | None = None
     outcome: dict | None = None
 
-
-def parse_vary(text: str, option: str = "--vary") -> list[str]:
-    names = [t.strip() for t in text.split(",") if t.strip()]
-    for n in names:
-        if n not in VARIABLE:
-            raise InputError(option, "", f"unknown parameter {n!r} (choose from {', '.join(VARIABLE)})")
-    if not names:
-        raise InputError(option, "", "name at least one parameter")
-    return names
-
-
-def parse_by(text: str, option: str = "--by") -> float:
-    t = text.strip()
-    try:
-        v = float(t[:-1]) / 100 if t.endswith("%") else float(t)
-    except ValueError:
-        raise InputError(option, "", f"{text!r} is not a fraction or a percentage (e.g. 10%)") from None
-    if not (0 < v < 1):
-        raise InputError(option, "", f"{text!r} must be between 0 and 100%")
-    return v
+    def as_dict(self) -> dict:
+        """The row as plain JSON-ready values (``patchgen sweep --json``)."""
+        lqg = self.lqg_margins
+        return {"case": self.label, "factors": self.factors, "K": self.K,
+                "lqr_margins": {"lower_gm_db": self.lqr_margins.lower_gm_db,
+                                "upper_gm_db": self.lqr_margins.upper_gm_db, "pm_deg": self.lqr_margins.pm_deg},
+                "lqg_margins": None if lqg is None else {"lower_gm_db": lqg.lower_gm_db, "upper_gm_db": lqg.upper_gm_db,
+                                                         "pm_deg": lqg.pm_deg, "stable": lqg.stable},
+                "pot_changes": self.pot_changes, "patch_error": self.patch_error, "outcome": self.outcome}
 
 
 def cases(names: list[str], by: float, both_signs: bool = True) -> list[tuple[str, dict[str, float]]]:
@@ -62,23 +55,22 @@ def cases(names: list[str], by: float, both_signs: bool = True) -> list[tuple[st
     return out
 
 
-def _outcome(net, plant, spec, machine, scenario_path, runs) -> dict:
+def _outcome(net, plant, machine, bench, scenario_path, runs) -> dict:
     """The nominal patch (as wired) on this plant, with the bench actuator, noise and drift."""
     from patchgen.bench.simulate import simulate
     from patchgen.inputs.scenario import load_scenario
-    from patchgen.profiles.bench import load_bench
 
     sc = load_scenario(scenario_path)
-    r = simulate(net, plant, load_bench(spec.bench, spec.path), machine, sc, runs=runs, keep_history=False)
+    r = simulate(net, plant, bench, machine, sc, runs=runs, keep_history=False)
     return {"scenario": sc.name, "runs": runs, "fraction_held": r.distribution.fraction_held,
             "max_abs_theta_deg": max(x.max_abs_theta_deg for x in r.runs),
             "max_abs_s_m": max(x.max_abs_s_m for x in r.runs)}
 
 
 def _row(args) -> SweepRow:
-    spec, machine, label, factors, rolloff, nominal_pots, nominal_net, scenario_path, runs = args
+    spec, machine, bench, label, factors, nominal_pots, nominal_net, scenario_path, runs = args
     plant = plant_params(spec).scaled(**factors)
-    d = design(spec, plant=plant, default_rolloff_s=rolloff)
+    d = design_on(spec, machine, bench, plant=plant)
     changes: dict[str, tuple[float, float]] = {}
     err = None
     try:
@@ -90,24 +82,50 @@ def _row(args) -> SweepRow:
         err = exc.message
     outcome = None
     if nominal_net is not None and scenario_path is not None:
-        outcome = _outcome(nominal_net, plant, spec, machine, scenario_path, runs)
-    return SweepRow(label, factors, [float(k) for k in d.K[0]], d.lqr_margins, d.lqg_margins, changes, err,
-                    outcome)
+        outcome = _outcome(nominal_net, plant, machine, bench, scenario_path, runs)
+    return SweepRow(label=label, factors=factors, K=[float(k) for k in d.K[0]], lqr_margins=d.lqr_margins,
+                    lqg_margins=d.lqg_margins, pot_changes=changes, patch_error=err, outcome=outcome)
 
 
 def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float, workers: int = 0,
-          scenario_path=None, runs: int = 1) -> list[SweepRow]:
-    """Design for each perturbed plant, rows spread over the machine's cores (workers=0: all).
-    With a scenario, each row also predicts how the nominal patch (as wired) does on that plant."""
-    rolloff = machine.imperfections.differentiator_rolloff_s
-    nominal = design(spec, default_rolloff_s=rolloff)
+          scenario_path=None, runs: int = 1, *, bench: BenchProfile | None = None) -> list[SweepRow]:
+    """Design for each perturbed plant (see :func:`cases`), rows spread over the computer's cores.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The nominal spec.
+    machine : MachineProfile
+        The machine the patches are allocated on (and its differentiator roll-off).
+    names : list of str
+        Plant parameters to vary (VARIABLE).
+    by : float
+        Relative change, 0 < by < 1.
+    workers : int
+        Processes; 0: one per core.
+    scenario_path : str, optional
+        With a scenario, each row also predicts how the nominal patch (as wired) does on that plant.
+    runs : int
+        Noise seeds per row for that prediction.
+    bench : BenchProfile, optional
+        The bench the spec names, loaded by the caller: needed for the prediction and for an
+        estimator shaped for the bench's noise.
+
+    Returns
+    -------
+    list of SweepRow
+        In the order of :func:`cases`.
+    """
+    if scenario_path is not None and bench is None:
+        raise ValueError("a sweep's predicted outcome simulates the bench: pass the bench profile")
+    nominal = design_on(spec, machine, bench)
     try:
         net = build_patch(nominal, machine)
         nominal_pots = {p.id: p.setting for p in net.pots}
     except InputError:
         net, nominal_pots = None, {}
-    jobs = [(spec, machine, label, f, rolloff, nominal_pots, net, scenario_path, runs) for label, f in cases(names, by)]
-    if workers == 1 or len(jobs) < 4:
+    jobs = [(spec, machine, bench, label, f, nominal_pots, net, scenario_path, runs) for label, f in cases(names, by)]
+    if workers == 1 or len(jobs) < PARALLEL_FROM:
         return [_row(j) for j in jobs]
     with ProcessPoolExecutor(max_workers=workers or None) as ex:
         return list(ex.map(_row, jobs))

@@ -6,6 +6,7 @@ import pytest
 
 from patchgen.design.lqg import design
 from patchgen.inputs.spec import load_spec
+from patchgen.profiles.bench import load_bench
 from tests.conftest import design_path
 
 
@@ -125,3 +126,19 @@ def test_case2_ltr_recovers_most_lqr_margins():
     assert abs(lqg.lower_gm_db - lqr.lower_gm_db) < 2.0
     # rho = 1 leaves the loop nearly unrobust, as the thesis found for every case
     assert d.estimator.margins_rho1.pm_deg < 10
+
+
+def test_a_noise_shaped_estimator_needs_the_bench():
+    """The design stage reads no file: a filtered differentiator without its bench is refused,
+    and with a bench its predicted force error comes from that bench's noise."""
+    spec = load_spec(design_path("bench-recommended"))
+    with pytest.raises(ValueError, match="bench profile"):
+        design(spec)
+    bench = load_bench(spec.bench, spec.path)
+    d = design(spec, bench)
+    assert d.estimator.kind == "filtered_differentiator" and d.estimator.chosen_from_noise
+    assert d.estimator.rolloff_s == pytest.approx(0.00631)  # the shipped sheet's roll-off
+    quiet = bench.model_copy(update={"sensors": bench.sensors.model_copy(
+        update={"noise_V_rms": {k: v / 100 for k, v in bench.sensors.noise_V_rms.items()}})})
+    # the figure the roll-off was chosen by is the given bench's: a hundredth of the noise, a tenth of the error
+    assert design(spec, quiet).estimator.force_error_rms_N < d.estimator.force_error_rms_N / 10

@@ -8,12 +8,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from patchgen.cli.design import design_from_path
-from patchgen.design.lqg import design
+from patchgen.design.lqg import design, design_on
 from patchgen.inputs.errors import InputError, ResourceError
 from patchgen.inputs.spec import DesignSpec, check_spec
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import wired_law
+from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
 from tests.conftest import design_path
 
@@ -172,7 +173,7 @@ def test_two_slaved_units_when_one_is_not_enough():
     # the reduced observer of the bench design needs 13 pots: too many for one GP-6 (8), fits two
     d0, m = design_from_path(design_path("bench-recommended"))
     sp = d0.spec.model_copy(update={"estimator": d0.spec.estimator.model_copy(update={"kind": "reduced_observer"})})
-    d = design(sp, default_rolloff_s=m.imperfections.differentiator_rolloff_s)
+    d = design_on(sp, m, load_bench(sp.bench))
     with pytest.raises(ResourceError):
         build_patch(d, m, 1)
     net = build_patch(d, m, "auto")

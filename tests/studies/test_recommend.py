@@ -11,7 +11,7 @@ from click.testing import CliRunner
 from patchgen.bench.simulate import simulate
 from patchgen.cli import cli
 from patchgen.cli.design import design_from_path
-from patchgen.design.lqg import design, loop_with_controller
+from patchgen.design.lqg import design, design_on, loop_with_controller
 from patchgen.design.model import plant_params
 from patchgen.design.observer import reduced_observer
 from patchgen.inputs.scenario import load_scenario
@@ -20,12 +20,14 @@ from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import read_netlist
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
-from patchgen.studies.recommend import Candidate, recommend, table_rows
+from patchgen.studies.comparison import table_rows
+from patchgen.studies.recommend import Candidate, recommend
 from tests.conftest import ROOT, design_path
 from tests.patch.test_patch_roundtrip import check_roundtrip
 
 HOLD = ROOT / "patchgen" / "sims" / "hold-120s.toml"
 RUNS = 200  # 200 noise seeds, as recommend's default
+BENCH = load_bench("uw-1991")  # the bench bench-recommended names
 
 
 @pytest.fixture(scope="module")
@@ -66,15 +68,21 @@ def test_recommended_netlist_reads_back_to_the_design(recommended):
     kind = {"raw differentiator": "differentiator", "filtered differentiator": "filtered_differentiator",
             "reduced observer": "reduced_observer", "Kalman": "kalman"}[rec["chosen"]]
     sp = spec.model_copy(update={"estimator": spec.estimator.model_copy(update={"kind": kind})})
-    d = design(sp, default_rolloff_s=m.imperfections.differentiator_rolloff_s)
+    d = design_on(sp, m, load_bench(sp.bench))
     check_roundtrip(d, read_netlist(out / "netlist.json"), m.pot_resolution)
 
 
 def test_ranking_is_deterministic():
     spec = load_spec(design_path("bench-recommended"))
     m, b, sc = load_machine("gp6"), load_bench("uw-1991"), load_scenario(HOLD)
-    a = recommend(spec, m, b, sc, runs=6)
+    calls = []
+    a = recommend(spec, m, b, sc, runs=6, progress=lambda *call: calls.append(call))
     c = recommend(spec, m, b, sc, runs=6)
+    # the command's progress bar: runs done over all candidates that fit, each labelled
+    total = 6 * sum(x.fraction_ok is not None for x in a.ranked)
+    assert {t for _, _, t in calls} == {total} and calls[-1][1] == total
+    assert [n for _, n, _ in calls] == sorted(n for _, n, _ in calls)
+    assert {label for label, _, _ in calls} == {x.label for x in a.ranked if x.fraction_ok is not None}
     assert [x.label for x in a.ranked] == [x.label for x in c.ranked]
     assert table_rows(a) == table_rows(c)
     # candidates that do not fit come last, with their resource error
@@ -87,10 +95,10 @@ def test_rank_key_orders_by_outcome_then_margin_then_swing():
     d, _ = design_from_path(design_path("thesis-ch5"))
     base = dict(design=d, netlist=None, error=None, runs=10, fraction_fallen=0.0, fraction_tripped=0.0,
                 fraction_overloaded=0.0)
-    better = Candidate("a", "x", fraction_ok=0.9, worst_swing_V=9.0, **base)
-    worse = Candidate("b", "x", fraction_ok=0.8, worst_swing_V=1.0, **base)
-    calmer = Candidate("c", "x", fraction_ok=0.9, worst_swing_V=2.0, **base)
-    unsim = Candidate("d", "x", None, None, "does not fit")
+    better = Candidate(label="a", kind="x", fraction_ok=0.9, worst_swing_V=9.0, **base)
+    worse = Candidate(label="b", kind="x", fraction_ok=0.8, worst_swing_V=1.0, **base)
+    calmer = Candidate(label="c", kind="x", fraction_ok=0.9, worst_swing_V=2.0, **base)
+    unsim = Candidate(label="d", kind="x", design=None, netlist=None, error="does not fit")
     got = sorted([unsim, worse, better, calmer], key=lambda c: c.rank_key(0))
     assert [c.label for c in got] == ["c", "a", "b", "d"]  # same outcome and margins: smaller swing
 
@@ -99,7 +107,7 @@ def test_rank_key_orders_by_outcome_then_margin_then_swing():
 def test_new_estimators_have_margins_and_a_stable_linear_loop(kind):
     spec = load_spec(design_path("bench-recommended"))
     sp = spec.model_copy(update={"estimator": spec.estimator.model_copy(update={"kind": kind})})
-    d = design(sp)
+    d = design(sp, BENCH)
     m = d.lqg_margins
     assert m.stable and m.pm_deg >= 30.0  # patchgen.design.corner keeps at least 30 deg
     assert m.lower_gm is not None and m.lower_gm < 1.0  # open-loop unstable plant: a lower limit
@@ -110,7 +118,7 @@ def test_new_estimators_have_margins_and_a_stable_linear_loop(kind):
 
 def test_reduced_observer_structure():
     spec = load_spec(design_path("bench-recommended"))
-    d = design(spec)
+    d = design(spec, BENCH)
     obs = reduced_observer(d.model, 25.0)
     assert obs.unmeasured == ("theta_dot", "actuator")
     np.testing.assert_allclose(np.diag(obs.F), [-25.0, -25.0])
@@ -124,7 +132,7 @@ def test_reduced_observer_patch_reads_back_on_a_roomier_machine():
     (more pots and amplifiers, else the same profile) its netlist realises the design's law."""
     spec = load_spec(design_path("bench-recommended"))
     sp = spec.model_copy(update={"estimator": spec.estimator.model_copy(update={"kind": "reduced_observer"})})
-    d = design(sp)
+    d = design(sp, BENCH)
     m = load_machine("gp6")
     amps = list(m.amplifiers) + [a.model_copy(update={"id": f"A{9 + i}"}) for i, a in enumerate(m.amplifiers[4:])]
     big = m.model_copy(update={"pot_count": 20, "amplifiers": amps})

@@ -7,11 +7,12 @@ import sys
 import numpy as np
 import pytest
 
+from patchgen.cli.options import parse_by, parse_vary
 from patchgen.design.lqg import design
 from patchgen.inputs.spec import load_spec
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.machine import load_machine
-from patchgen.studies.sweep import cases, parse_by, parse_vary, sweep
+from patchgen.studies.sweep import cases, sweep
 from tests.conftest import ROOT, design_path
 
 

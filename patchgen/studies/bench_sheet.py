@@ -1,0 +1,66 @@
+"""A patch's files with its bench prediction on the sheet: the patch simulated in the standard
+scenarios (patchgen.bench.prediction), as the sheet's 'Predicted on the bench' section.
+
+The simulator (numba) is imported only when a prediction is made, so a patch without one stays
+light.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+from patchgen.design.lqg import Design
+from patchgen.design.model import plant_params
+from patchgen.patch.netlist import Netlist
+from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
+from patchgen.render.patchfiles import patch_files
+from patchgen.render.sheet import SheetSection
+
+if TYPE_CHECKING:  # pragma: no cover - the simulator loads numba, only when a prediction is made
+    from patchgen.bench.simulate import RunSummary
+
+HOLD_RUNS = 20  # noise seeds of the sheet's 120 s hold unless asked otherwise (patchgen patch --runs)
+
+
+def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: Netlist,
+                  runs_hold: int = HOLD_RUNS, done: dict[str, list[RunSummary]] | None = None) -> SheetSection:
+    """'Predicted on the bench': the patch in the standard scenarios, with the bench's figures.
+
+    Parameters
+    ----------
+    d : Design
+        The design the patch realises (its spec gives the plant and the track).
+    machine, bench : MachineProfile, BenchProfile
+        The machine the patch is on and the bench it is simulated against.
+    net : Netlist
+        The patch.
+    runs_hold : int
+        Noise seeds of the long hold.
+    done : dict, optional
+        Runs already simulated, by scenario name (see patchgen.bench.prediction.predict).
+
+    Returns
+    -------
+    SheetSection
+        One row per scenario and a note naming the bench's figures and the linearised loop.
+    """
+    from patchgen.bench.prediction import diagnosis_note, predict, prediction_rows  # the simulator: numba
+
+    plant = plant_params(d.spec)
+    header, rows = prediction_rows(predict(net, plant, bench, machine, runs_hold=runs_hold, done=done))
+    note = (f"From this netlist on the {bench.id} bench: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
+            f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; drift "
+            f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s (profile default, no GP-6 figure published); "
+            f"rails +/-{machine.imperfections.saturation_V:g} V; switches at +/-{d.spec.plant.d / 2:g} m. "
+            + diagnosis_note(net, plant, bench))
+    return SheetSection("Predicted on the bench", header, rows, note)
+
+
+def predicted_patch_files(d: Design, machine: MachineProfile, bench: BenchProfile, net: Netlist,
+                          sections: Sequence[SheetSection] = (), runs_hold: int = HOLD_RUNS,
+                          done: dict[str, list[RunSummary]] | None = None) -> dict[str, str]:
+    """Every file of a patch (patchgen.render.patchfiles.PATCH_FILES), the bench prediction first
+    on the sheet, then ``sections``; arguments as :func:`bench_section`."""
+    return patch_files(d, machine, net, [bench_section(d, machine, bench, net, runs_hold, done), *sections])

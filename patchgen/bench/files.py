@@ -17,7 +17,6 @@ from patchgen.bench.results import SimResult
 from patchgen.render import plot_helper
 
 FONT_SIZE = 8  # points: the plot's text, small enough for a panel 1.5 inches high
-SVG_SALT = "patchgen"  # the SVG's hash salt, as patchgen.render.plotting.save's default
 _UNITS = {"t": "s", "s": "m", "theta": "rad", "s_dot": "m_per_s", "theta_dot": "rad_per_s",
           "s_ref": "m", "u_c": "V", "force": "N"}
 
@@ -129,22 +128,4 @@ def _plot(result: SimResult, svg: bool = False) -> dict[str, bytes]:
             events.append(f"fallen at {first.fall_time_s:.2f} s")
         fig.suptitle(f"{result.design} / {result.scenario.name} / {mode} / seed {result.seed}: "
                      + (", ".join(events) if events else "held"))
-        return _rendered(fig, "history", svg)
-
-
-def _rendered(fig, stem: str, svg: bool) -> dict[str, bytes]:
-    """The figure as PNG (no software tag) and, with ``svg``, as a deterministic SVG (glyphs as
-    paths, fixed hash salt, no date), as patchgen.render.plotting.save writes them."""
-    import matplotlib
-
-    from patchgen.render import plotting
-
-    png = io.BytesIO()
-    fig.savefig(png, format="png", dpi=plotting.PNG_DPI, metadata={"Software": None})
-    files = {f"{stem}.png": png.getvalue()}
-    if svg:
-        text = io.BytesIO()
-        with matplotlib.rc_context({**plotting.SVG_RC, "svg.hashsalt": SVG_SALT}):
-            fig.savefig(text, format="svg", metadata={"Date": None, "Creator": None})
-        files[f"{stem}.svg"] = text.getvalue()
-    return files
+        return plotting.rendered(fig, "history", svg)

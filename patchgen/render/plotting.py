@@ -58,15 +58,32 @@ def stacked(width_in: float, height_in: float, n: int, top_in: float = 0.4, bott
     return fig, axes
 
 
-def save(fig, png: Path, svg: Path | None = None, dpi: float = PNG_DPI, salt: str = "patchgen") -> list[Path]:
-    """Write the figure as PNG (no software tag) and, when ``svg`` is given, as a deterministic
-    SVG (fixed hash salt, no date). Returns the paths written."""
+def rendered(fig, stem: str, svg: bool = False, dpi: float = PNG_DPI, salt: str = "patchgen") -> dict[str, bytes]:
+    """The figure as ``<stem>.png`` (no software tag) and, with ``svg``, as a deterministic
+    ``<stem>.svg`` (glyphs as paths, fixed hash salt, no date), as file name -> bytes for the
+    all-or-nothing writer (patchgen.render.outputs)."""
+    import io
+
     import matplotlib
 
-    fig.savefig(png, dpi=dpi, metadata={"Software": None})
+    png = io.BytesIO()
+    fig.savefig(png, format="png", dpi=dpi, metadata={"Software": None})
+    files = {f"{stem}.png": png.getvalue()}
+    if svg:
+        text = io.BytesIO()
+        with matplotlib.rc_context({**SVG_RC, "svg.hashsalt": salt}):
+            fig.savefig(text, format="svg", metadata={"Date": None, "Creator": None})
+        files[f"{stem}.svg"] = text.getvalue()
+    return files
+
+
+def save(fig, png: Path, svg: Path | None = None, dpi: float = PNG_DPI, salt: str = "patchgen") -> list[Path]:
+    """Write the figure as PNG and, when ``svg`` is given, as SVG (see :func:`rendered`); returns
+    the paths written."""
+    files = rendered(fig, "figure", svg is not None, dpi, salt)
+    Path(png).write_bytes(files["figure.png"])
     paths = [Path(png)]
     if svg is not None:
-        with matplotlib.rc_context({**SVG_RC, "svg.hashsalt": salt}):
-            fig.savefig(svg, metadata={"Date": None, "Creator": None})
+        Path(svg).write_bytes(files["figure.svg"])
         paths.append(Path(svg))
     return paths

@@ -18,15 +18,9 @@ from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, write_files
-from patchgen.spice.deck import (
-    NgspiceError,
-    NgspiceMissing,
-    SpiceSettings,
-    compare,
-    plot_comparison,
-    run_ngspice,
-    spice_deck,
-)
+from patchgen.spice.compare import compare, comparison_plot
+from patchgen.spice.deck import SpiceSettings, spice_deck
+from patchgen.spice.run import NgspiceError, NgspiceMissing, run_ngspice
 
 from . import cli
 from .inputs import check_spice_points, load_inputs, scenario_for
@@ -97,11 +91,9 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_js
         sys.exit(NgspiceError.exit_status)
     own = simulate(net, plant, bench, machine, scenario, ideal=ideal)
     cmp = compare(sp, _Own(own.history))
-    with tempfile.TemporaryDirectory() as tmp:
-        plots = plot_helper.submit(plot_comparison, cmp, Path(tmp) / "overlay", f"{d.spec.name}: ngspice vs "
-                                   f"patchgen ({scenario.name}{', ideal' if ideal else ''})", "patchgen", svg)
-        for p in plots.result():
-            files[p.name] = p.read_bytes()
+    plots = plot_helper.submit(comparison_plot, cmp, "overlay", f"{d.spec.name}: ngspice vs "
+                               f"patchgen ({scenario.name}{', ideal' if ideal else ''})", "patchgen", svg)
+    files.update(plots.result())
     report = {"design": d.spec.name, "scenario": scenario.name, "ideal": ideal, "tolerance": tolerance,
               "ngspice_run_time_s": sp.run_time_s,
               "signals": {k: {"rms_rel": v.rms_rel, "max_rel": v.max_rel, "peak": v.peak}

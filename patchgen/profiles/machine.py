@@ -42,6 +42,12 @@ class Components(InputModel):
     opamp_open_loop_gain: Real = bounded(1, 1e12, open_lo=True)
     opamp_output_resistance_ohm: Real = bounded(0, 1e6)
 
+    def input_resistor_ohm(self, weight: int) -> float:
+        """The input resistor of a weight-``weight`` input: the profile's own value for x1 and
+        x10, else the x1 resistor divided by the weight (gain = feedback / input resistance)."""
+        named = {1: self.input_resistor_x1_ohm, 10: self.input_resistor_x10_ohm}
+        return float(named.get(weight, self.input_resistor_x1_ohm / weight))
+
 
 class Imperfections(InputModel):
     """What makes the real machine differ from ideal elements (for the simulators)."""

@@ -17,17 +17,10 @@ from patchgen.patch.netlist import Netlist, read_netlist
 from patchgen.plant.equations import PlantParams, nonlinear_rhs
 from patchgen.profiles.bench import BenchProfile, load_bench
 from patchgen.profiles.machine import load_machine
-from patchgen.spice.deck import (
-    NgspiceError,
-    NgspiceMissing,
-    SpiceSettings,
-    compare,
-    loaded_ratio,
-    plot_comparison,
-    pot_wiper_position,
-    run_ngspice,
-    spice_deck,
-)
+from patchgen.spice.compare import compare, comparison_plot
+from patchgen.spice.deck import SpiceSettings, spice_deck
+from patchgen.spice.elements import loaded_ratio, pot_wiper_position
+from patchgen.spice.run import NgspiceError, NgspiceMissing, run_ngspice
 
 FIXTURE = Path(__file__).parents[1] / "fixtures" / "thesis-ch5.netlist.json"
 # Table B.1 of the thesis.
@@ -258,12 +251,12 @@ def test_ngspice_agrees_with_ideal_reference(net, gp6, bench, reference, tmp_pat
     assert cmp.agrees(0.01)
     # u_c leaves A7 (the netlist's output) and starts at the loop's static value.
     assert result.signals["u_c"][0] == pytest.approx(reference.signals["u_c"][0], rel=1e-3)
-    files = plot_comparison(cmp, tmp_path / "overlay", title="thesis-ch5, 10 deg", svg=True)
-    assert [f.suffix for f in files] == [".png", ".svg"] and all(f.stat().st_size > 0 for f in files)
-    assert [f.suffix for f in plot_comparison(cmp, tmp_path / "png")] == [".png"]  # SVG on request
-    again = plot_comparison(cmp, tmp_path / "again", svg=True)
-    first = plot_comparison(cmp, tmp_path / "first", svg=True)
-    assert hashlib.sha256(first[1].read_bytes()).digest() == hashlib.sha256(again[1].read_bytes()).digest()
+    files = comparison_plot(cmp, "overlay", title="thesis-ch5, 10 deg", svg=True)
+    assert list(files) == ["overlay.png", "overlay.svg"] and all(len(b) > 0 for b in files.values())
+    assert files["overlay.png"].startswith(b"\x89PNG") and b"<svg" in files["overlay.svg"]
+    assert list(comparison_plot(cmp, "png")) == ["png.png"]  # SVG on request
+    again = comparison_plot(cmp, "overlay", title="thesis-ch5, 10 deg", svg=True)
+    assert hashlib.sha256(files["overlay.svg"]).digest() == hashlib.sha256(again["overlay.svg"]).digest()
 
 
 @needs_ngspice

@@ -1,0 +1,105 @@
+"""ngspice against patchgen's own simulation: both runs on a common time grid, each signal's
+difference relative to its peak, and an overlay plot."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+
+class Trajectory(Protocol):
+    """Anything with a time vector and named signals (SpiceResult, patchgen's simulation result)."""
+
+    t: np.ndarray
+    signals: Mapping[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class SignalAgreement:
+    """Difference of one signal between two runs, relative to its peak in the reference run."""
+
+    name: str
+    peak: float
+    rms_diff: float
+    max_diff: float
+
+    @property
+    def rms_rel(self) -> float:
+        return self.rms_diff / self.peak if self.peak > 0 else 0.0
+
+    @property
+    def max_rel(self) -> float:
+        return self.max_diff / self.peak if self.peak > 0 else 0.0
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """ngspice against patchgen's own simulation on a common time grid."""
+
+    t: np.ndarray
+    spice: dict[str, np.ndarray]
+    own: dict[str, np.ndarray]
+    signals: dict[str, SignalAgreement]
+
+    def agrees(self, tolerance: float = 0.01) -> bool:
+        """True when every compared signal's peak difference is within ``tolerance`` of its peak."""
+        return all(a.max_rel <= tolerance for a in self.signals.values())
+
+    def lines(self) -> list[str]:
+        return [f"{a.name}: peak {a.peak:.4g}, RMS difference {100 * a.rms_rel:.3f} % of peak, "
+                f"largest difference {100 * a.max_rel:.3f} % of peak" for a in self.signals.values()]
+
+
+def compare(spice_result: Trajectory, own_result: Trajectory, names: Sequence[str] = ("theta", "s"),
+            n_points: int = 2001) -> Comparison:
+    """Interpolate both runs on a common grid over their shared time span and measure the RMS and
+    largest difference of each named signal, relative to its peak magnitude in ``own_result``."""
+    t0 = max(spice_result.t[0], own_result.t[0])
+    t1 = min(spice_result.t[-1], own_result.t[-1])
+    t = np.linspace(t0, t1, n_points)
+    spice, own, out = {}, {}, {}
+    for name in names:
+        a = np.interp(t, spice_result.t, spice_result.signals[name])
+        b = np.interp(t, own_result.t, own_result.signals[name])
+        diff = a - b
+        spice[name], own[name] = a, b
+        out[name] = SignalAgreement(name, float(np.max(np.abs(b))), float(np.sqrt(np.mean(diff ** 2))),
+                                    float(np.max(np.abs(diff))))
+    return Comparison(t, spice, own, out)
+
+
+PLOT_DPI = 120  # the overlay is a small figure: screen resolution is enough
+_UNITS = {"theta": ("deg", 180.0 / math.pi), "s": ("m", 1.0), "s_dot": ("m/s", 1.0),
+          "theta_dot": ("deg/s", 180.0 / math.pi), "u_c": ("V", 1.0)}
+
+
+def comparison_plot(cmp: Comparison, stem: str, title: str = "", own_label: str = "patchgen",
+                    svg: bool = False) -> dict[str, bytes]:
+    """Overlay plot of each compared signal (ngspice dashed over patchgen's), as ``<stem>.png``
+    (and a deterministic ``<stem>.svg`` with ``svg``), file name -> bytes."""
+    from patchgen.render import plotting
+
+    names = list(cmp.signals)
+    height = 2.4 * len(names)
+    fig, axes = plotting.stacked(7.0, height, len(names), top_in=0.6 if title else 0.35, left_in=0.85,
+                                 hspace=0.35 * 2.4 / 1.9)
+    cols = plotting.columns(fig, dpi=PLOT_DPI)
+    for ax, name in zip(axes, names):
+        unit, scale = _UNITS.get(name, ("", 1.0))
+        a = cmp.signals[name]
+        ax.plot(*plotting.envelope(cmp.t, cmp.own[name] * scale, cols), color="tab:blue", lw=1.6, label=own_label)
+        ax.plot(*plotting.envelope(cmp.t, cmp.spice[name] * scale, cols), color="tab:orange", lw=1.2, ls="--",
+                label="ngspice")
+        ax.set_ylabel(f"{name} ({unit})" if unit else name)
+        ax.set_title(f"{name}: RMS diff {100 * a.rms_rel:.3f} %, max diff {100 * a.max_rel:.3f} % "
+                     f"of peak", fontsize=9)
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("time (s)")
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return plotting.rendered(fig, stem, svg, dpi=PLOT_DPI)

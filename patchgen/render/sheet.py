@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import jinja2
 
 from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
-from patchgen.render.diagram import dial_decimals, quantity_label, signed_label
+from patchgen.render.diagram_symbols import dial_decimals, quantity_label, signed_label
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from patchgen.patch.netlist import Netlist, read_netlist
-from patchgen.render.diagram import quantity_label, wiring_svg
+from patchgen.render.diagram import wiring_svg
+from patchgen.render.diagram_symbols import quantity_label
 
 FIXTURE = Path(__file__).parents[1] / "fixtures" / "thesis-ch5.netlist.json"
 SVG_NS = "{http://www.w3.org/2000/svg}"

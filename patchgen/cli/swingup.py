@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import json
-import tempfile
 from dataclasses import asdict
-from pathlib import Path
 
 import click
 from rich.console import Console
@@ -20,7 +18,7 @@ from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.sheet import SheetSection
 from patchgen.studies.bench_sheet import predicted_patch_files
 from patchgen.swingup.manoeuvre import manoeuvre, plot_manoeuvre
-from patchgen.swingup.output import compact_schedule_rows, patch_sheet_rows, write_outputs
+from patchgen.swingup.output import compact_schedule_rows, output_files, patch_sheet_rows
 from patchgen.swingup.run import compare_strategies
 from patchgen.swingup.strategies import STRATEGIES
 
@@ -74,13 +72,11 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg
                            "Switch times for the operator or a sequencer, from hanging at rest; hand off (IC -> OP) "
                            "when the pendulum is in the zone. Computed for this design's plant model: an open-loop "
                            "schedule is fragile, the supervisory logic re-times itself on the measured states.")
-    with tempfile.TemporaryDirectory() as tmp:
-        title = (f"{d.spec.name}: {strategy} pump-up, hand-off at {p.handoff_time or float('nan'):.2f} s, "
-                 "patched hold")
-        job = plot_helper.submit(pump_and_manoeuvre_files, p, m, tmp, title, svg)
-        files = predicted_patch_files(d, machine, bench, net, [section], runs_hold=SHEET_HOLD_RUNS)
-        for path in job.result():
-            files[path.name] = path.read_bytes()
+    title = (f"{d.spec.name}: {strategy} pump-up, hand-off at {p.handoff_time or float('nan'):.2f} s, "
+             "patched hold")
+    job = plot_helper.submit(pump_and_manoeuvre_files, p, m, title, svg)
+    files = predicted_patch_files(d, machine, bench, net, [section], runs_hold=SHEET_HOLD_RUNS)
+    files.update(job.result())
     if m.sensitivity is not None:
         summary["schedule_sensitivity"] = [{k: v.item() if hasattr(v, "item") else v for k, v in asdict(r).items()}
                                            for r in m.sensitivity]
@@ -134,9 +130,9 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg
     console.print("wrote " + ", ".join(str(x) for x in written))
 
 
-def pump_and_manoeuvre_files(p, m, out: str, title: str, svg: bool) -> list[Path]:
-    """The pump-up's files and the manoeuvre plot, written into ``out`` (by the plot helper)."""
-    return write_outputs(p, out, svg=svg) + plot_manoeuvre(m, Path(out) / "manoeuvre", title, svg)
+def pump_and_manoeuvre_files(p, m, title: str, svg: bool) -> dict[str, bytes]:
+    """The pump-up's files and the manoeuvre plot, as file name -> bytes (drawn by the plot helper)."""
+    return {**output_files(p, svg=svg), **plot_manoeuvre(m, "manoeuvre", title, svg)}
 
 
 def _num(x, fmt: str) -> str:

@@ -9,8 +9,6 @@ matplotlib is imported here, by the commands that plot, never at start-up.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 PNG_DPI = 100
@@ -75,15 +73,3 @@ def rendered(fig, stem: str, svg: bool = False, dpi: float = PNG_DPI, salt: str 
             fig.savefig(text, format="svg", metadata={"Date": None, "Creator": None})
         files[f"{stem}.svg"] = text.getvalue()
     return files
-
-
-def save(fig, png: Path, svg: Path | None = None, dpi: float = PNG_DPI, salt: str = "patchgen") -> list[Path]:
-    """Write the figure as PNG and, when ``svg`` is given, as SVG (see :func:`rendered`); returns
-    the paths written."""
-    files = rendered(fig, "figure", svg is not None, dpi, salt)
-    Path(png).write_bytes(files["figure.png"])
-    paths = [Path(png)]
-    if svg is not None:
-        Path(svg).write_bytes(files["figure.svg"])
-        paths.append(Path(svg))
-    return paths

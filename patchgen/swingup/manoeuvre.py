@@ -8,7 +8,6 @@ takes over from that state, its integrators released from zero (IC -> OP at hand
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -19,9 +18,9 @@ from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.swingup.handoff import Zone, default_spread, estimate_zone, lyapunov_matrix, wrap_angle
+from patchgen.swingup.pumping import SwingUpResult
 from patchgen.swingup.run import optimised_schedule, swing_up
 from patchgen.swingup.schedule import SensitivityRow, schedule_sensitivity
-from patchgen.swingup.strategies import SwingUpResult
 
 RECOVERY_S = 5.0  # a start counts as recovered if the patch holds it this long and brings theta home
 HOME_DEG = 3.0
@@ -81,9 +80,9 @@ def manoeuvre(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Ma
     return Manoeuvre(pump, simulate(net, plant, bench, machine, sc, ideal=ideal), hold_s, zone, sensitivity)
 
 
-def plot_manoeuvre(m: Manoeuvre, stem: Path, title: str, svg: bool = False) -> list[Path]:
-    """s, theta and force over the whole manoeuvre, the hand-off marked (PNG, and a deterministic
-    SVG with ``svg``)."""
+def plot_manoeuvre(m: Manoeuvre, stem: str, title: str, svg: bool = False) -> dict[str, bytes]:
+    """s, theta and force over the whole manoeuvre, the hand-off marked: ``<stem>.png`` (and a
+    deterministic ``<stem>.svg`` with ``svg``), file name -> bytes."""
     from patchgen.render import plotting
 
     p = m.pump
@@ -114,4 +113,4 @@ def plot_manoeuvre(m: Manoeuvre, stem: Path, title: str, svg: bool = False) -> l
     ax[2].set_xlabel("t (s)")
     ax[0].legend(loc="upper right", fontsize=8)
     ax[0].set_title(title, fontsize=10)
-    return plotting.save(fig, stem.with_suffix(".png"), stem.with_suffix(".svg") if svg else None)
+    return plotting.rendered(fig, stem, svg)

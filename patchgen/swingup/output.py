@@ -6,12 +6,13 @@ Outputs are deterministic: fixed number formats, and the SVG has a fixed hash sa
 from __future__ import annotations
 
 import csv
-from pathlib import Path
+import io
 
 import numpy as np
 
 from patchgen.swingup.handoff import wrap_angle
-from patchgen.swingup.strategies import SwingUpResult, pendulum_energy, upright_energy
+from patchgen.swingup.pumping import SwingUpResult
+from patchgen.swingup.strategies import pendulum_energy, upright_energy
 
 TABLE_COLUMNS = ("series", "phase", "phase_name", "force_N", "time_s", "reason")
 
@@ -62,38 +63,30 @@ def switching_table_markdown(result: SwingUpResult) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_outputs(result: SwingUpResult, out_dir: str | Path, stem: str = "swingup", svg: bool = False) -> list[Path]:
-    """Write <stem>-history.csv, <stem>-switching.csv/.md and <stem>.png (and <stem>.svg with
-    ``svg``); return the paths."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    hist = out / f"{stem}-history.csv"
+def output_files(result: SwingUpResult, stem: str = "swingup", svg: bool = False) -> dict[str, bytes]:
+    """<stem>-history.csv, <stem>-switching.csv/.md and <stem>.png (and <stem>.svg with ``svg``),
+    file name -> bytes for the all-or-nothing writer."""
     E = pendulum_energy(result.plant, result.x.T) / upright_energy(result.plant)
-    with hist.open("w", newline="") as fh:
-        w = csv.writer(fh, lineterminator="\n")
-        w.writerow(["t_s", "s_m", "theta_rad", "s_dot_m_s", "theta_dot_rad_s", "force_N", "E_over_E0",
-                    "mode"])
-        for i in range(result.t.size):
-            w.writerow([f"{result.t[i]:.4f}"] + [f"{v:.6g}" for v in result.x[i]]
-                       + [f"{result.u[i]:.6g}", f"{E[i]:.6g}", "hold" if result.holding[i] else "pump"])
-    paths.append(hist)
-    table = out / f"{stem}-switching.csv"
-    with table.open("w", newline="") as fh:
-        w = csv.writer(fh, lineterminator="\n")
-        w.writerow(TABLE_COLUMNS)
-        for r in result.table_rows():
-            w.writerow([_fmt(r[c]) for c in TABLE_COLUMNS])
-    paths.append(table)
-    md = out / f"{stem}-switching.md"
-    md.write_text(switching_table_markdown(result))
-    paths.append(md)
-    paths += plot(result, out / f"{stem}.png", out / f"{stem}.svg" if svg else None)
-    return paths
+    hist = io.StringIO()
+    w = csv.writer(hist, lineterminator="\n")
+    w.writerow(["t_s", "s_m", "theta_rad", "s_dot_m_s", "theta_dot_rad_s", "force_N", "E_over_E0", "mode"])
+    for i in range(result.t.size):
+        w.writerow([f"{result.t[i]:.4f}"] + [f"{v:.6g}" for v in result.x[i]]
+                   + [f"{result.u[i]:.6g}", f"{E[i]:.6g}", "hold" if result.holding[i] else "pump"])
+    table = io.StringIO()
+    w = csv.writer(table, lineterminator="\n")
+    w.writerow(TABLE_COLUMNS)
+    for r in result.table_rows():
+        w.writerow([_fmt(r[c]) for c in TABLE_COLUMNS])
+    files = {f"{stem}-history.csv": hist.getvalue().encode(), f"{stem}-switching.csv": table.getvalue().encode(),
+             f"{stem}-switching.md": switching_table_markdown(result).encode()}
+    files.update(plot(result, stem, svg))
+    return files
 
 
-def plot(result: SwingUpResult, png: Path, svg: Path | None = None) -> list[Path]:
-    """States, force and energy against time, with the hand-off marked (PNG; SVG when given)."""
+def plot(result: SwingUpResult, stem: str, svg: bool = False) -> dict[str, bytes]:
+    """States, force and energy against time, with the hand-off marked: ``<stem>.png`` (and
+    ``<stem>.svg`` with ``svg``), file name -> bytes."""
     from patchgen.render import plotting
 
     t, x = result.t, result.x
@@ -123,4 +116,4 @@ def plot(result: SwingUpResult, png: Path, svg: Path | None = None) -> list[Path
     if result.handoff_time is not None:
         title += f": hand-off at {result.handoff_time:.3f} s"
     ax[0].set_title(title)
-    return plotting.save(fig, png, svg, salt="patchgen-swingup")
+    return plotting.rendered(fig, stem, svg, salt="patchgen-swingup")

@@ -14,6 +14,7 @@ import numpy as np
 
 from patchgen.plant.equations import PlantParams
 from patchgen.swingup.handoff import Zone, lqr_zone
+from patchgen.swingup.pumping import HOLD_S, PUMP_T_MAX_S, STEP_S, SwingUpResult, saturated_state_feedback, simulate
 from patchgen.swingup.schedule import (
     OptimisedSchedule,
     ScheduleSettings,
@@ -22,16 +23,7 @@ from patchgen.swingup.schedule import (
     replay,
     schedule_from_result,
 )
-from patchgen.swingup.strategies import (
-    STRATEGIES,
-    EnergyControl,
-    EnergySettings,
-    Supervisor,
-    SupervisorSettings,
-    SwingUpResult,
-    saturated_state_feedback,
-    simulate,
-)
+from patchgen.swingup.strategies import STRATEGIES, EnergyControl, EnergySettings, Supervisor, SupervisorSettings
 
 
 def default_zone(plant: PlantParams, K: np.ndarray, force_limit: float) -> Zone:
@@ -48,9 +40,9 @@ def swing_up(
     *,
     model: PlantParams | None = None,
     schedule: OptimisedSchedule | None = None,
-    t_max: float = 12.0,
-    hold_s: float = 5.0,
-    dt: float = 1e-3,
+    t_max: float = PUMP_T_MAX_S,
+    hold_s: float = HOLD_S,
+    dt: float = STEP_S,
 ) -> SwingUpResult:
     """Full manoeuvre on ``plant``; the strategy's logic (and any schedule) uses ``model``
     (default: the plant itself). For 'schedule' without a given schedule, the supervisory run on
@@ -99,7 +91,7 @@ class StrategySummary:
 
 def robustness(
     plant: PlantParams, force_limit: float, strategy: str, K: np.ndarray, zone: Zone,
-    schedule: OptimisedSchedule | None = None, by: float = 0.10, t_max: float = 12.0,
+    schedule: OptimisedSchedule | None = None, by: float = 0.10, t_max: float = PUMP_T_MAX_S,
 ) -> list[tuple[str, float, SwingUpResult]]:
     """Run a strategy designed on ``plant`` against each plant with one parameter off by +/-by."""
     return [
@@ -111,7 +103,7 @@ def robustness(
 
 def compare_strategies(
     plant: PlantParams, force_limit: float, K: np.ndarray, zone: Zone | None = None,
-    by: float = 0.10, t_max: float = 12.0,
+    by: float = 0.10, t_max: float = PUMP_T_MAX_S,
 ) -> list[StrategySummary]:
     """Time to zone, max |s|, E/E0 at hand-off, and success on the 10 perturbed plants."""
     zone = default_zone(plant, K, force_limit) if zone is None else zone

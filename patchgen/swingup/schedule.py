@@ -25,15 +25,8 @@ from scipy.optimize import minimize
 from patchgen.plant.compiled import N_COEF, plant_accel, plant_coefficients, sincos
 from patchgen.plant.equations import PlantParams
 from patchgen.swingup.handoff import Zone, wrapped
-from patchgen.swingup.strategies import (
-    Schedule,
-    ScheduleReplay,
-    SwingUpResult,
-    Switch,
-    hanging_state,
-    saturated_state_feedback,
-    simulate,
-)
+from patchgen.swingup.pumping import HOLD_S, PUMP_T_MAX_S, STEP_S, SwingUpResult, saturated_state_feedback, simulate
+from patchgen.swingup.strategies import Schedule, ScheduleReplay, Switch, hanging_state
 
 PARAMETERS = ("M", "m", "l", "b_VF", "c")
 
@@ -242,9 +235,9 @@ def replay(
     force_limit: float,
     K: np.ndarray | None = None,
     *,
-    t_max: float = 12.0,
-    hold_s: float = 5.0,
-    dt: float = 1e-3,
+    t_max: float = PUMP_T_MAX_S,
+    hold_s: float = HOLD_S,
+    dt: float = STEP_S,
 ) -> SwingUpResult:
     """Play a schedule open-loop on a plant; hand off to sat(-K x) when the zone is entered."""
     hold = None if K is None else saturated_state_feedback(K, force_limit)
@@ -278,7 +271,7 @@ def schedule_sensitivity(
     force_limit: float,
     *,
     by: float = 0.10,
-    t_max: float = 12.0,
+    t_max: float = PUMP_T_MAX_S,
 ) -> list[SensitivityRow]:
     """Replay the schedule open-loop on plants with M, m, l, b_VF, c off by +/-by."""
     rows = []

@@ -19,21 +19,27 @@ m g l cos(theta), so E0 = m g l upright at rest and -m g l hanging at rest.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal, Protocol
 
 import numpy as np
 
 from patchgen.plant.equations import PlantParams
 from patchgen.plant.step import rk4_step
-from patchgen.swingup.handoff import Zone, wrapped
 
 Strategy = Literal["supervisory", "schedule", "energy"]
 STRATEGIES: tuple[str, ...] = ("supervisory", "schedule", "energy")
 
 PUSH, BRAKE, COAST = 1, 2, 3
 PHASE_NAMES = {PUSH: "push", BRAKE: "reverse", COAST: "coast"}
+
+# The energy law's gains (Astrom-Furuta form; the thesis pumps bang-bang only), chosen on the
+# uw-1991 plant (Table B.1): k saturates the force for an energy error of a few percent of
+# m g l, and the cart terms pull it back to the track's centre without stalling the pumping.
+ENERGY_GAIN_N_PER_J = 300.0
+CART_POSITION_GAIN_N_PER_M = 5.0
+CART_VELOCITY_GAIN_NS_PER_M = 3.0
+TRACK_MARGIN = 0.9  # the guard brakes when the stopping point would pass this fraction of d/2
 
 
 def pendulum_energy(plant: PlantParams, x: np.ndarray) -> np.ndarray | float:
@@ -186,10 +192,10 @@ class EnergySettings:
     """Gains of the energy law: k in N/J, the cart terms k_s in N/m and k_v in N s/m; the guard
     brakes at full force when the cart's stopping point would pass track_margin x d/2."""
 
-    k: float = 300.0
-    k_s: float = 5.0
-    k_v: float = 3.0
-    track_margin: float = 0.9
+    k: float = ENERGY_GAIN_N_PER_J
+    k_s: float = CART_POSITION_GAIN_N_PER_M
+    k_v: float = CART_VELOCITY_GAIN_NS_PER_M
+    track_margin: float = TRACK_MARGIN
 
 
 class EnergyControl:
@@ -263,141 +269,3 @@ class ScheduleReplay:
 
     def force(self, t: float, x: np.ndarray) -> float:
         return self.schedule.force_over(t, self.h)
-
-
-# --------------------------------------------------------------------------- the manoeuvre
-
-
-def saturated_state_feedback(K: np.ndarray, force_limit: float) -> Callable[[float, np.ndarray], float]:
-    """u = sat(-K x) on the plant states, angle wrapped about upright."""
-    k = np.asarray(K, dtype=float).ravel()[:4]
-
-    def law(t: float, x: np.ndarray) -> float:
-        return float(np.clip(-(k @ wrapped(x)), -force_limit, force_limit))
-
-    return law
-
-
-@dataclass
-class SwingUpResult:
-    """A simulated manoeuvre: histories, the switching table, and when the hand-off happened."""
-
-    strategy: str
-    plant: PlantParams
-    force_limit: float
-    zone: Zone
-    t: np.ndarray
-    x: np.ndarray            # (N, 4)
-    u: np.ndarray            # (N,)
-    holding: np.ndarray      # (N,) bool: the linear controller is in charge
-    switches: list[Switch]
-    handoff_time: float | None
-    dt: float
-    notes: dict = field(default_factory=dict)
-
-    @property
-    def reached(self) -> bool:
-        return self.handoff_time is not None
-
-    @property
-    def pump(self) -> np.ndarray:
-        return ~self.holding
-
-    @property
-    def max_abs_s_pump(self) -> float:
-        """Largest cart excursion before the hand-off (m)."""
-        return float(np.max(np.abs(self.x[self.pump, 0])))
-
-    @property
-    def max_abs_s(self) -> float:
-        return float(np.max(np.abs(self.x[:, 0])))
-
-    @property
-    def on_track(self) -> bool:
-        return self.max_abs_s < self.plant.d / 2.0
-
-    @property
-    def handoff_state(self) -> np.ndarray | None:
-        if self.handoff_time is None:
-            return None
-        return self.x[int(np.argmax(self.holding))]
-
-    @property
-    def energy_ratio_at_handoff(self) -> float | None:
-        """E / E0 when the linear controller takes over."""
-        xh = self.handoff_state
-        return None if xh is None else float(pendulum_energy(self.plant, xh) / upright_energy(self.plant))
-
-    @property
-    def held(self) -> bool:
-        """Balanced at the end: upright within 0.05 rad and on the track throughout."""
-        end = wrapped(self.x[-1])
-        return self.reached and self.on_track and abs(end[1]) < 0.05 and abs(end[0]) < self.plant.d / 2.0
-
-    def table_rows(self) -> list[dict]:
-        """The switching table as rows (series, phase, force, time), ending with the hand-off."""
-        rows = [
-            {"series": s.series, "phase": s.phase, "phase_name": s.phase_name, "force_N": s.force_N,
-             "time_s": s.time_s, "reason": s.reason}
-            for s in self.switches
-            if self.handoff_time is None or s.time_s <= self.handoff_time
-        ]
-        if self.handoff_time is not None:
-            rows.append({"series": None, "phase": None, "phase_name": "hand-off", "force_N": None,
-                         "time_s": round(self.handoff_time, 6), "reason": "state entered the zone"})
-        return rows
-
-
-def simulate(
-    plant: PlantParams,
-    controller: PumpController,
-    zone: Zone,
-    *,
-    strategy: str,
-    force_limit: float,
-    hold: Callable[[float, np.ndarray], float] | None = None,
-    x0: np.ndarray | None = None,
-    t_max: float = 12.0,
-    hold_s: float = 5.0,
-    dt: float = 1e-3,
-    stop_off_track: bool = True,
-) -> SwingUpResult:
-    """Pump with ``controller`` until the state enters ``zone`` (or t_max), then ``hold`` for hold_s.
-
-    With ``stop_off_track`` the run ends when the cart reaches a limit switch (the bench cuts power).
-    """
-    x = hanging_state() if x0 is None else np.array(x0, dtype=float)
-    ts, xs, us, hs = [0.0], [x.copy()], [], []
-    handoff: float | None = None
-    t_end = t_max
-    k = 0
-    while True:
-        t = k * dt
-        if handoff is None and zone.contains(x):
-            handoff = t
-            t_end = t + hold_s
-            if hold is None:
-                us.append(0.0)
-                hs.append(True)
-                break
-        if t >= t_end - 1e-12:
-            us.append(us[-1] if us else 0.0)
-            hs.append(handoff is not None)
-            break
-        holding = handoff is not None
-        u = hold(t, x) if holding else controller.force(t, x)
-        us.append(u)
-        hs.append(holding)
-        x = rk4_step(plant, x, u, dt)
-        k += 1
-        ts.append(k * dt)
-        xs.append(x.copy())
-        if stop_off_track and abs(x[0]) >= plant.d / 2.0:
-            us.append(0.0)
-            hs.append(holding)
-            break
-    return SwingUpResult(
-        strategy=strategy, plant=plant, force_limit=force_limit, zone=zone,
-        t=np.array(ts), x=np.array(xs), u=np.array(us), holding=np.array(hs, dtype=bool),
-        switches=list(controller.switches), handoff_time=handoff, dt=dt,
-    )

@@ -46,7 +46,7 @@ def patch_cmd(spec: str, out_dir: str, force: bool, runs_hold: int, no_predict: 
                               indent=2, sort_keys=True, allow_nan=False))
         return
     console = Console()
-    console.print(pot_table(net))
+    console.print(pot_table(net, machine.procedure.pot_setting))
     for n in net.notes:
         console.print(f"[yellow]note:[/yellow] {n}")
     console.print("wrote " + ", ".join(str(p) for p in written))

@@ -65,7 +65,7 @@ def recommend_cmd(spec, out_dir, runs, scenario_path, seed, as_json, force):
                   fmt_figure(r["pm_deg"], "{:.1f}"), f"{r['worst_swing_V']:.2f}", f"{r['amplifiers']}/{r['pots']}")
     Console(width=max(150, console.width)).print(t)
     console.print(f"chosen: [bold]{best.label}[/bold]")
-    console.print(pot_table(best.netlist))
+    console.print(pot_table(best.netlist, machine.procedure.pot_setting))
     for n in best.netlist.notes:
         console.print(f"[yellow]note:[/yellow] {n}")
     console.print("wrote " + ", ".join(str(p) for p in written))

@@ -293,14 +293,8 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                               rolloff_s=b.rolloff_s if b is not None else None,
                               tau_s=b.tau_s if b is not None else None, purpose=purpose))
     ints = [a.id for a in amps if a.role in ("integrator", "lag")]
-    operation = [
-        "Patch with the machine in POT SET, servo amplifier off.",
-        "Set each pot in POT SET mode with its load connected (the dial then reads the loaded coefficient).",
-    ]
-    if ints:
-        operation.append(f"IC: integrators {', '.join(ints)} to 0 V (IC jacks grounded); check the outputs read 0.")
-    operation += ["OP: switch to operate with the pendulum held upright, then power the servo amplifier.",
-                  "Watch the overload lamps; HD (hold) freezes the integrators if one lights."]
+    operation = machine.procedure.steps("operation", machine=machine.name, units=machine.units, resolution=res,
+                                        reference_V=machine.reference_V, integrators=tuple(ints), signs=False)
     return Netlist(design=real.design_name, machine=machine.id, machine_name=machine.name,
                    reference_V=machine.reference_V, time_scale_s=machine.time_scale_s,
                    pot_resolution=res, sensors=sensors, amplifiers=amps, pots=pots,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded
@@ -58,6 +58,48 @@ class Imperfections(InputModel):
     amplifier_noise_V_rms: Real = bounded(0, 10)
     noise_bandwidth_Hz: Real = bounded(1e-3, 1e9)
     differentiator_rolloff_s: Real = bounded(1e-4, 1)
+    drift_source: str = Field(default="profile figure", min_length=1, max_length=200,
+                              description="where the drift figures come from (printed beside the drift rate)")
+
+
+# What a procedure step may name, filled in for each patch (see Procedure.steps)
+PLACEHOLDERS = ("machine", "units", "resolution", "reference_V", "integrators")
+
+
+class Step(InputModel):
+    """One step of a procedure, in the machine's own words; ``{name}`` placeholders from
+    PLACEHOLDERS are filled in for the patch."""
+
+    text: str = Field(min_length=1, max_length=1000)
+    # always, or only for a patch with integrators (ICs to set), with a sign table, or without one
+    when: Literal["always", "integrators", "signs", "no_signs"] = "always"
+
+    @field_validator("text")
+    @classmethod
+    def _placeholders(cls, text: str) -> str:
+        try:
+            text.format(**{k: "" for k in PLACEHOLDERS})
+        except (AttributeError, KeyError, IndexError, ValueError) as exc:
+            raise ValueError(f"{{...}} may name only {', '.join(PLACEHOLDERS)} ({exc})") from None
+        return text
+
+
+class Procedure(InputModel):
+    """How a patch is run on this machine, as its manual words it: the operating steps a netlist
+    carries, the bench checklist a sheet prints, and how a pot is set (the pot table's title)."""
+
+    pot_setting: str = Field(min_length=1, max_length=200)
+    operation: list[Step] = Field(min_length=1, max_length=50)
+    checklist: list[Step] = Field(min_length=1, max_length=50)
+
+    def steps(self, which: str, *, machine: str, units: int, resolution: float, reference_V: float,
+              integrators: tuple[str, ...], signs: bool) -> list[str]:
+        """The ``which`` ("operation" or "checklist") steps that apply to a patch, filled in."""
+        applies = {"always": True, "integrators": bool(integrators), "signs": signs, "no_signs": not signs}
+        values = {"machine": machine, "units": f", {units} units slaved together" if units > 1 else "",
+                  "resolution": f"{resolution:g}", "reference_V": f"{reference_V:g}",
+                  "integrators": ", ".join(integrators)}
+        return [s.text.format(**values) for s in getattr(self, which) if applies[s.when]]
 
 
 class MachineProfile(InputModel):
@@ -71,9 +113,7 @@ class MachineProfile(InputModel):
     pot_resolution: Real = bounded(1e-9, 0.5)
     pot_max: Real = bounded(0, 100, open_lo=True)
     input_weights: list[Annotated[Int, Field(ge=1, le=1000)]] = Field(min_length=1, max_length=10)
-    ic_mode: str
-    pot_set_mode: str
-    overload_indicator: bool
+    procedure: Procedure
     max_units: Int = bounded(1, MAX_UNITS)
     units: Int = bounded(1, MAX_UNITS, default=1,
                          description="machines slaved together in this profile (see slaved())")

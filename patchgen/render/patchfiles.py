@@ -77,6 +77,6 @@ def patch_files(d: Design, machine: MachineProfile, net: Netlist,
     """
     files = {"netlist.json": net.to_json(), "pots.csv": pots_csv(net)}
     svg = wiring_svg(net)
-    html, md = render_sheet(net, sheet_summary(d, sections), svg)
+    html, md = render_sheet(net, sheet_summary(d, sections), svg, machine.procedure)
     files.update({"wiring.svg": svg, "patch-sheet.html": html, "patch-sheet.md": md})
     return files

@@ -31,8 +31,10 @@ def pots_csv(net: Netlist) -> str:
     return buf.getvalue()
 
 
-def pot_table(net: Netlist) -> Table:
-    t = Table(title=f"Pot settings for {net.design} on the {net.machine_name} (set in POT SET, load connected)",
+def pot_table(net: Netlist, pot_setting: str) -> Table:
+    """The pot table for the terminal; ``pot_setting`` says how the machine's pots are set (its
+    profile's procedure.pot_setting)."""
+    t = Table(title=f"Pot settings for {net.design} on the {net.machine_name} ({pot_setting})",
               title_justify="left")
     for c, j in (("pot", "left"), ("setting", "right"), ("signal", "left"), ("into", "left"),
                  ("coefficient", "right"), ("realised", "right"), ("error", "right")):

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import jinja2
 
 from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
+from patchgen.profiles.machine import Procedure
 from patchgen.render.diagram_symbols import dial_decimals, quantity_label, signed_label
 
 
@@ -45,16 +46,28 @@ class SheetSummary:
     sections: list[SheetSection] = field(default_factory=list)
 
 
-def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str) -> tuple[str, str]:
-    """The patch sheet as (HTML, Markdown); ``svg`` is the wiring diagram, inlined in the HTML."""
-    ctx = sheet_context(netlist, summary)
+def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str, procedure: Procedure) -> tuple[str, str]:
+    """The patch sheet as (HTML, Markdown).
+
+    Parameters
+    ----------
+    netlist : Netlist
+        The patch.
+    summary : SheetSummary
+        The design beside it: gains, poles, margins, extra sections.
+    svg : str
+        The wiring diagram, inlined in the HTML.
+    procedure : Procedure
+        The machine profile's procedure: the bench checklist in the machine's own words.
+    """
+    ctx = sheet_context(netlist, summary, procedure)
     html = _env(autoescape=True).get_template("patch-sheet.html.j2").render(
         **ctx, svg=_inline_svg(svg))
     md = _env(autoescape=False).get_template("patch-sheet.md.j2").render(**ctx)
     return _end(html), _end(md)
 
 
-def sheet_context(net: Netlist, summary: SheetSummary) -> dict:
+def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> dict:
     """Every value the templates show, as plain strings and lists."""
     decimals = dial_decimals(net.pot_resolution)
     amps = {a.id: a for a in net.amplifiers}
@@ -129,37 +142,14 @@ def sheet_context(net: Netlist, summary: SheetSummary) -> dict:
         "operation": list(net.operation),
         "ics": ics,
         "sign_checks": sign_checks,
-        "checklist": _checklist(net, bool(ics), bool(sign_checks)),
+        "checklist": procedure.steps("checklist", machine=net.machine_name, units=net.units,
+                                     resolution=net.pot_resolution, reference_V=net.reference_V,
+                                     integrators=tuple(i["id"] for i in ics), signs=bool(sign_checks)),
         "notes": list(net.notes),
         "sections": summary.sections,
         "resolution": f"{net.pot_resolution:g}",
         "output_amp": net.output.source,
     }
-
-
-def _checklist(net: Netlist, has_ics: bool, has_signs: bool) -> list[str]:
-    items = [
-        "Servo amplifier powered off; the cart held at the centre of the track.",
-        f"Patch every cord of the wire list, ticking each one ({net.machine_name}"
-        + (f", {net.units} units slaved together" if net.units > 1 else "") + ").",
-        "Set every pot in POT SET mode with its load connected (the amplifier input patched): "
-        f"the dial then reads the loaded coefficient; set it to the table's value to "
-        f"{net.pot_resolution:g}.",
-    ]
-    if has_ics:
-        items.append("Zero the integrators: IC mode with each IC jack at the value listed, check "
-                     "each integrator output reads minus its IC-jack voltage, then back to IC.")
-    items.append(f"In OP, watch the overload lamps: any lamp means an amplifier has left "
-                 f"±{net.reference_V:g} V; stop and recheck the patch.")
-    if has_signs:
-        items.append("Check each sign with one feedback path at a time (all other pots at 0): "
-                     "move the quantity by hand and check that u_c moves the way the sign table "
-                     "says.")
-    else:
-        items.append("Check each sign with one feedback path at a time (all other pots at 0).")
-    items.append("Restore every pot to its setting, pendulum held upright, then power the servo "
-                 "amplifier last; keep a hand on its power switch.")
-    return items
 
 
 def _path_sign(net: Netlist, amp_id: str) -> int | None:

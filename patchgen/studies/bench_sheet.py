@@ -52,7 +52,7 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
     header, rows = prediction_rows(predict(net, plant, bench, machine, runs_hold=runs_hold, done=done))
     note = (f"From this netlist on the {bench.id} bench: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
             f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; drift "
-            f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s (profile default, no GP-6 figure published); "
+            f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s ({machine.imperfections.drift_source}); "
             f"rails +/-{machine.imperfections.saturation_V:g} V; switches at +/-{d.spec.plant.d / 2:g} m. "
             + diagnosis_note(net, plant, bench))
     return SheetSection("Predicted on the bench", header, rows, note)

@@ -97,6 +97,13 @@ WITH_M = dumps(with_field(LAG, "machine", MP))
 WITH_B = dumps(with_field(LAG, "bench", BP))
 
 
+def _steps(which: str, i: int, **update) -> dict:
+    """GP6 with step ``i`` of its procedure's ``which`` list updated."""
+    data = copy.deepcopy(GP6)
+    data["procedure"][which][i].update(update)
+    return data
+
+
 def machine_case(name: str, data: dict, field_path: str) -> Case:
     return Case(f"machine-{name}", patch_argv(), MP, field_path, {"spec.toml": WITH_M, "m.toml": dumps(data)})
 
@@ -107,7 +114,7 @@ def bench_case(name: str, data: dict, field_path: str) -> Case:
 
 OHM, FARAD = Num(1, 1e12), Num(1e-15, 1)
 MACHINE_FIELDS = {
-    "id": str, "name": str, "ic_mode": str, "pot_set_mode": str, "overload_indicator": bool,
+    "id": str, "name": str, "procedure.pot_setting": str, "imperfections.drift_source": str,
     "reference_V": Num(0, 1000, open_lo=True), "time_scale_s": Num(1e-6, 1e6),
     "pot_resolution": Num(1e-9, 0.5), "pot_max": Num(0, 100, open_lo=True),
     "pot_count": int, "max_units": int,
@@ -163,6 +170,15 @@ def profile_cases() -> list[Case]:
         "unknown-top": (with_field(GP6, "bogus", 1), "bogus"),
         "unknown-components": (with_field(GP6, "components.bogus", 1.0), "components.bogus"),
         "scalar-imperfections": (with_field(GP6, "imperfections", 3), "imperfections"),
+        "procedure-missing": (with_field(GP6, "procedure", DELETE), "procedure"),
+        "procedure-no-steps": (with_field(GP6, "procedure.checklist", []), "procedure.checklist"),
+        "step-unknown-placeholder": (_steps("operation", 1, text="Set {pots} now."), "procedure.operation[1].text"),
+        "step-bad-brace": (_steps("checklist", 0, text="Patch {machine"), "procedure.checklist[0].text"),
+        "step-positional": (_steps("checklist", 2, text="Set {0}."), "procedure.checklist[2].text"),
+        "step-empty": (_steps("operation", 0, text=""), "procedure.operation[0].text"),
+        "step-when-unknown": (_steps("checklist", 3, when="sometimes"), "procedure.checklist[3].when"),
+        "step-unknown-key": (_steps("operation", 2, colour="red"), "procedure.operation[2].colour"),
+        "step-not-table": (with_field(GP6, "procedure.operation", ["Patch it."]), "procedure.operation[0]"),
     }
     out += [machine_case(k, data, f) for k, (data, f) in shapes.items()]
     out += field_cases("", UW, BENCH_FIELDS, bench_case)

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from patchgen.patch.netlist import read_netlist, wire_list
+from patchgen.profiles.machine import load_machine
 from patchgen.render.diagram import wiring_svg
 from patchgen.render.sheet import SheetSection, SheetSummary, render_sheet
 
@@ -31,7 +32,7 @@ SUMMARY = SheetSummary(
 
 def _render():
     net = read_netlist(FIXTURE)
-    return net, *render_sheet(net, SUMMARY, wiring_svg(net))
+    return net, *render_sheet(net, SUMMARY, wiring_svg(net), load_machine("gp6").procedure)
 
 
 def test_html_pot_table_has_a_row_per_pot():

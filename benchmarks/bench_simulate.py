@@ -70,7 +70,7 @@ def python_control_system(net, bench, gp6):
     amplifier (integrator output, lag output, differentiator roll-off state; summers unused)."""
     import control
 
-    c = compile_circuit(net, gp6)
+    c = compile_circuit(net, gp6, bench)
     ns, na = c.n_sensors, c.n_amps
     K_U = bench.actuator.K_U
 

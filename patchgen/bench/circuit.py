@@ -20,18 +20,16 @@ import numpy as np
 
 from patchgen.inputs.errors import InputError
 from patchgen.patch.netlist import Netlist
+from patchgen.patch.reading import read
 from patchgen.plant.equations import PLANT_STATES
+from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
 # amplifier kinds as the inner loop knows them
 SUMMER, INTEGRATOR, LAG, DIFFERENTIATOR = 0, 1, 2, 3
 _KIND = {"summer": SUMMER, "inverter": SUMMER, "integrator": INTEGRATOR, "lag": LAG,
          "differentiator": DIFFERENTIATOR}
-_STATEFUL_OUTPUT = (INTEGRATOR, LAG)  # output is a state: no feed-through
-
-
-class AlgebraicLoopError(InputError):
-    """Feed-through amplifiers wired in a loop with no integrator or lag in it."""
+_STATEFUL_OUTPUT = (INTEGRATOR, LAG)  # output is a state: no feed-through (patchgen.patch.reading)
 
 
 @dataclass(frozen=True)
@@ -79,75 +77,49 @@ class Circuit:
         return np.isin(self.amp_kind, _STATEFUL_OUTPUT)
 
 
-def compile_circuit(net: Netlist, machine: MachineProfile) -> Circuit:
-    """Compile a netlist; unknown sources, missing time constants and algebraic loops are errors.
+def sensor_constants(net: Netlist, bench: BenchProfile) -> np.ndarray:
+    """Volts per SI unit of each of the netlist's sensors, as the bench's sensors give them.
 
-    A differentiator with no ``rolloff_s`` gets the machine's default roll-off (a pure
-    differentiator cannot be patched, nor simulated at a fixed step); with no ``T_d_s`` it gets
-    the machine time scale.
+    The one source of sensor constants for the simulator and the SPICE deck: the patch meets the
+    bench's sensors, whatever constants the design was scaled with (the netlist's volts_per_unit).
+    """
+    return np.array([float(getattr(bench.sensors, s.quantity)) for s in net.sensors], dtype=np.float64)
+
+
+def compile_circuit(net: Netlist, machine: MachineProfile, bench: BenchProfile) -> Circuit:
+    """Compile a netlist (read by patchgen.patch.reading) for the bench it meets.
+
+    Unknown sources, missing time constants and algebraic loops are errors. A differentiator
+    with no ``rolloff_s`` gets the machine's default roll-off (a pure differentiator cannot be
+    patched, nor simulated at a fixed step); with no ``T_d_s`` it gets the machine time scale.
     """
     src = f"netlist {net.design}"
-    sensor_ids = tuple(s.id for s in net.sensors)
     for i, s in enumerate(net.sensors):
         if s.quantity not in PLANT_STATES:
             raise InputError(src, f"sensors[{i}].quantity",
                              f"unknown quantity {s.quantity!r} (known: {', '.join(PLANT_STATES)})")
-    amps = {a.id: a for a in net.amplifiers}
-    if len(amps) != len(net.amplifiers):
-        raise InputError(src, "amplifiers", "an amplifier id is used twice")
-    pots = {p.id: p for p in net.pots}
-    known = set(sensor_ids) | set(amps)
-    for i, a in enumerate(net.amplifiers):
-        for k, inp in enumerate(a.inputs):
-            where = f"amplifiers[{i}].inputs[{k}]"
-            if inp.source not in known:
-                raise InputError(src, f"{where}.source", f"unknown source {inp.source!r}")
-            if inp.pot is not None and inp.pot not in pots:
-                raise InputError(src, f"{where}.pot", f"unknown pot {inp.pot!r}")
-    if net.output.source not in known:
-        raise InputError(src, "output.source", f"unknown source {net.output.source!r}")
-
-    order = _evaluation_order(net, src)
-    index = {sid: i for i, sid in enumerate(sensor_ids)}
-    index.update({aid: len(sensor_ids) + j for j, aid in enumerate(order)})
-
-    position = {a.id: i for i, a in enumerate(net.amplifiers)}
+    reading = read(net, machine.imperfections.differentiator_rolloff_s)
+    index = {sid: i for i, sid in enumerate(reading.sensors)}
+    index.update({aid: len(reading.sensors) + j for j, aid in enumerate(reading.order)})
     kind, ptr, in_src, in_gain, p1, p2, ic = [], [0], [], [], [], [], []
-    for aid in order:
-        a = amps[aid]
+    for aid in reading.order:
+        a = reading.amplifiers[aid]
         kd = _KIND[a.role]
         kind.append(kd)
-        for inp in a.inputs:
-            setting = pots[inp.pot].setting if inp.pot is not None else 1.0
-            in_src.append(index[inp.source])
-            in_gain.append(inp.weight * setting)
+        in_src += [index[f.source] for f in a.feeds]
+        in_gain += [f.gain for f in a.feeds]
         ptr.append(len(in_src))
-        ic.append(a.ic_V or 0.0)
-        if kd == INTEGRATOR:
-            p1.append(1.0 / net.time_scale_s)
-            p2.append(0.0)
-        elif kd == LAG:
-            if not a.tau_s or a.tau_s <= 0:
-                raise InputError(src, f"amplifiers[{position[aid]}].tau_s",
-                                 "a lag amplifier needs tau_s > 0")
-            p1.append(1.0 / a.tau_s)
-            p2.append(0.0)
-        elif kd == DIFFERENTIATOR:
-            r = a.rolloff_s if a.rolloff_s else machine.imperfections.differentiator_rolloff_s
-            td = a.T_d_s if a.T_d_s is not None else net.time_scale_s
-            p1.append(td / r)
-            p2.append(1.0 / r)
-        else:
-            p1.append(0.0)
-            p2.append(0.0)
+        ic.append(a.ic_V)
+        p1.append({INTEGRATOR: 1.0 / (a.T_s or 1.0), LAG: 1.0 / (a.tau_s or 1.0),
+                   DIFFERENTIATOR: (a.T_d_s or 0.0) / (a.rolloff_s or 1.0)}.get(kd, 0.0))
+        p2.append(1.0 / a.rolloff_s if kd == DIFFERENTIATOR else 0.0)
 
     return Circuit(
         design=net.design,
-        sensor_ids=sensor_ids,
-        sensor_state=np.array([PLANT_STATES.index(s.quantity) for s in net.sensors],
-                              dtype=np.int64),
-        sensor_gain=np.array([s.volts_per_unit for s in net.sensors], dtype=np.float64),
-        amp_ids=tuple(order),
+        sensor_ids=reading.sensors,
+        sensor_state=np.array([PLANT_STATES.index(s.quantity) for s in net.sensors], dtype=np.int64),
+        sensor_gain=sensor_constants(net, bench),
+        amp_ids=reading.order,
         amp_kind=np.array(kind, dtype=np.int64),
         in_ptr=np.array(ptr, dtype=np.int64),
         in_src=np.array(in_src, dtype=np.int64),
@@ -155,37 +127,5 @@ def compile_circuit(net: Netlist, machine: MachineProfile) -> Circuit:
         param1=np.array(p1, dtype=np.float64),
         param2=np.array(p2, dtype=np.float64),
         ic_V=np.array(ic, dtype=np.float64),
-        output_index=index[net.output.source],
+        output_index=index[reading.output],
     )
-
-
-def _evaluation_order(net: Netlist, src: str) -> list[str]:
-    """State-output amplifiers first (netlist order), then feed-through ones topologically."""
-    kinds = {a.id: _KIND[a.role] for a in net.amplifiers}
-    order = [a.id for a in net.amplifiers if kinds[a.id] in _STATEFUL_OUTPUT]
-    through = [a for a in net.amplifiers if kinds[a.id] not in _STATEFUL_OUTPUT]
-    deps = {a.id: [i.source for i in a.inputs
-                   if i.source in kinds and kinds[i.source] not in _STATEFUL_OUTPUT]
-            for a in through}
-    done: set[str] = set()
-    visiting: list[str] = []
-
-    def visit(aid: str) -> None:
-        if aid in done:
-            return
-        if aid in visiting:
-            loop = visiting[visiting.index(aid):] + [aid]
-            raise AlgebraicLoopError(
-                src, "amplifiers",
-                f"algebraic loop {' -> '.join(loop)}: feed-through amplifiers (summers, inverters, "
-                "differentiators) wired in a ring with no integrator or lag in it")
-        visiting.append(aid)
-        for dep in deps[aid]:
-            visit(dep)
-        visiting.pop()
-        done.add(aid)
-        order.append(aid)
-
-    for a in through:
-        visit(a.id)
-    return order

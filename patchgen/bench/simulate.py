@@ -85,7 +85,7 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     """
     if runs < 1:
         raise InputError("--runs", "", f"must be at least 1 (got {runs})")
-    circuit = compile_circuit(netlist, machine)
+    circuit = compile_circuit(netlist, machine, bench)
     base_seed = scenario.seed if seed is None else seed
     if not 0 <= base_seed < 2**63:
         raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")

@@ -12,7 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from patchgen.inputs.errors import InputError
 from patchgen.patch.netlist import Netlist
+from patchgen.patch.reading import read
 
 DYNAMIC = ("integrator", "lag", "differentiator")
 
@@ -36,61 +38,54 @@ class WiredLaw:
         return out
 
 
-def _gain(net: Netlist, inp) -> float:
-    k = net.pot(inp.pot).setting if inp.pot else 1.0
-    return inp.weight * k
-
-
 def wired_law(net: Netlist, output: str | None = None) -> WiredLaw:
-    """The linear law from the sensors to `output` (default: the control output's source)."""
-    sensors = [s.id for s in net.sensors]
-    dyn = [a.id for a in net.amplifiers if a.role in DYNAMIC]
+    """The linear law from the sensors to ``output`` (default: the control output's source).
+
+    Parameters
+    ----------
+    net : Netlist
+        The patch, read through :func:`patchgen.patch.reading.read` (ideal elements: a
+        differentiator must name its roll-off).
+    output : str, optional
+        A sensor or amplifier id whose voltage is the law's output.
+
+    Returns
+    -------
+    WiredLaw
+        Ac, Bc, Cc, Dc over the states of the integrators, lags and differentiator roll-offs.
+    """
+    r = read(net)
+    sensors = list(r.sensors)
+    dyn = [aid for aid, a in r.amplifiers.items() if a.role in DYNAMIC]
     ny, nx = len(sensors), len(dyn)
-    amps = {a.id: a for a in net.amplifiers}
-    T = net.time_scale_s
-    expr: dict[str, np.ndarray] = {}  # amp/sensor id -> row over [x; y]
-    for i, s in enumerate(sensors):
-        e = np.zeros(nx + ny)
-        e[nx + i] = 1.0
-        expr[s] = e
-    visiting: set[str] = set()
+    expr: dict[str, np.ndarray] = {s: _unit(nx + i, nx + ny) for i, s in enumerate(sensors)}  # row over [x; y]
 
     def input_sum(a) -> np.ndarray:
-        return sum((_gain(net, inp) * value(inp.source) for inp in a.inputs), np.zeros(nx + ny))
+        return sum((f.gain * expr[f.source] for f in a.feeds), np.zeros(nx + ny))
 
-    def value(src: str) -> np.ndarray:
-        if src in expr:
-            return expr[src]
-        if src not in amps:
-            raise ValueError(f"netlist: unknown source {src!r}")
-        a = amps[src]
-        if src in visiting:
-            raise ValueError(f"netlist: algebraic loop through {src}")
-        visiting.add(src)
-        e = np.zeros(nx + ny)
-        if a.role in ("integrator", "lag"):
-            e[dyn.index(src)] = 1.0
-        elif a.role == "differentiator":
-            # z' = (in - z)/r, out = -(T_d/r)(in - z)
-            e = -(a.T_d_s / a.rolloff_s) * (input_sum(a) - _unit(dyn.index(src), nx + ny))
+    for aid in r.order:  # states first, then each feed-through amplifier after what it reads
+        a = r.amplifiers[aid]
+        if a.stateful:
+            expr[aid] = _unit(dyn.index(aid), nx + ny)
+        elif a.role == "differentiator":  # z' = (in - z)/r, out = -(T_d/r)(in - z)
+            if not a.rolloff_s:
+                raise InputError(f"netlist {net.design}", f"amplifiers.{aid}.rolloff_s",
+                                 "a differentiator needs a roll-off > 0 (a pure one has no state-space law)")
+            expr[aid] = -(a.T_d_s / a.rolloff_s) * (input_sum(a) - _unit(dyn.index(aid), nx + ny))
         else:
-            e = -input_sum(a)
-        visiting.discard(src)
-        expr[src] = e
-        return e
-
+            expr[aid] = -input_sum(a)
     Ac, Bc = np.zeros((nx, nx)), np.zeros((nx, ny))
     for k, aid in enumerate(dyn):
-        a = amps[aid]
+        a = r.amplifiers[aid]
         s = input_sum(a)
         if a.role == "integrator":
-            row = -s / T
+            row = -s / a.T_s
         elif a.role == "lag":
             row = (-s - _unit(k, nx + ny)) / a.tau_s
         else:
             row = (s - _unit(k, nx + ny)) / a.rolloff_s
         Ac[k], Bc[k] = row[:nx], row[nx:]
-    o = value(output or net.output.source)
+    o = expr[output or r.output]
     return WiredLaw(tuple(sensors), tuple(dyn), Ac, Bc, o[None, :nx], o[None, nx:])
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from patchgen.patch.netlist import Amplifier, Netlist
+from patchgen.patch.reading import read
 from patchgen.render.diagram_symbols import amp_half_height
 
 # ----------------------------------------------------------------------------------------------
@@ -39,30 +40,8 @@ class Net:
     lanes: list[tuple[int, int, tuple]] = field(default_factory=list)  # (ch_from, ch_to, ykey)
 
 
-def stages(net: Netlist) -> dict[str, int]:
-    """Stage of each amplifier: one after its latest source; feedback loops broken in order."""
-    sensors = {s.id for s in net.sensors}
-    amp_ids = [a.id for a in net.amplifiers]
-    for a in net.amplifiers:
-        for inp in a.inputs:
-            if inp.source not in sensors and inp.source not in amp_ids:
-                raise ValueError(f"amplifier {a.id}: unknown source {inp.source!r}")
-    level: dict[str, int] = {s: 0 for s in sensors}
-    remaining = list(net.amplifiers)
-    while remaining:
-        ready = [a for a in remaining
-                 if all(i.source in level or i.source == a.id for i in a.inputs)]
-        pick = ready if ready else [next((a for a in remaining if a.role == "integrator"),
-                                         remaining[0])]
-        for a in pick:
-            placed = [level[i.source] for i in a.inputs if i.source in level]
-            level[a.id] = 1 + max(placed, default=0)
-        remaining = [a for a in remaining if a.id not in level]
-    return level
-
-
 def place(net: Netlist):
-    level = stages(net)
+    level = read(net).levels()
     sensors = [s.id for s in net.sensors]
     n_stages = max([level[a.id] for a in net.amplifiers], default=0) + 2  # + sensors + output
     out_stage = n_stages - 1

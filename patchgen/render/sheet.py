@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import jinja2
 
 from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
+from patchgen.patch.reading import read
 from patchgen.profiles.machine import Procedure
 from patchgen.render.diagram_symbols import dial_decimals, quantity_label, signed_label
 
@@ -108,9 +109,10 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
             "carries": _carries(a)}
            for a in net.amplifiers if a.role in ("integrator", "lag")]
 
+    reading = read(net)
     sign_checks = []
     for p in net.pots:
-        sign = _path_sign(net, p.amplifier)
+        sign = reading.path_sign(p.amplifier)
         if sign is None:
             continue
         if p.source in sensors:
@@ -150,33 +152,6 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "resolution": f"{net.pot_resolution:g}",
         "output_amp": net.output.source,
     }
-
-
-def _path_sign(net: Netlist, amp_id: str) -> int | None:
-    """Sign of u_c per volt entering ``amp_id``: one inversion per amplifier to the output.
-
-    None when the amplifier reaches the output by no path or by more than one.
-    """
-    feeds: dict[str, list[str]] = {}
-    for a in net.amplifiers:
-        for inp in a.inputs:
-            feeds.setdefault(inp.source, []).append(a.id)
-    paths: list[int] = []
-
-    def walk(node: str, depth: int, seen: frozenset[str]) -> None:
-        if len(paths) > 1:
-            return
-        if node == net.output.source:
-            paths.append(depth)
-            return
-        for nxt in feeds.get(node, []):
-            if nxt not in seen:
-                walk(nxt, depth + 1, seen | {nxt})
-
-    walk(amp_id, 1, frozenset({amp_id}))
-    if len(paths) != 1:
-        return None
-    return -1 if paths[0] % 2 else 1
 
 
 def _carries(a: Amplifier) -> str:

@@ -24,7 +24,9 @@ from typing import Literal
 
 import numpy as np
 
+from patchgen.bench.circuit import sensor_constants
 from patchgen.patch.netlist import Amplifier, Netlist, Pot
+from patchgen.patch.reading import Stage, read
 from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
@@ -100,10 +102,6 @@ def _amp_out(amp: Amplifier) -> str:
     return f"{spice_name(amp.id)}_out"
 
 
-def _sensor_constant(bench: BenchProfile, sensor_id: str) -> float:
-    return float(getattr(bench.sensors, sensor_id))
-
-
 def _noise_source(d: _Deck, name: str, plus: str, minus: str, rms: float, bandwidth_Hz: float,
                   duration_s: float) -> None:
     """White noise of the given rms, sampled at twice its bandwidth and joined linearly, as a
@@ -133,10 +131,9 @@ def _sensors(d: _Deck, net: Netlist, bench: BenchProfile, machine: MachineProfil
     would otherwise put hundreds of volts on the differentiator and stall ngspice's time step.
     Inside the reference the limit changes nothing (its rounding is below 1e-9 V up to 80 % of it)."""
     d.comment(f"Sensors: volts = bench sensor constant x state, limited at +/-{machine.reference_V} V")
-    for s in net.sensors:
+    for s, k in zip(net.sensors, sensor_constants(net, bench)):
         if s.id not in STATE_NODES:
             raise ValueError(f"sensor {s.id!r} is not a plant state")
-        k = _sensor_constant(bench, s.id)
         node = f"sens_{spice_name(s.id)}"
         rms = bench.sensors.noise_V_rms.get(s.id, 0.0) if settings.noise else 0.0
         clean = f"{node}_clean" if rms > 0 else node
@@ -162,7 +159,7 @@ def _pot(d: _Deck, net: Netlist, machine: MachineProfile, pot: Pot, load_ohm: fl
     return wiper
 
 
-def _amplifier(d: _Deck, net: Netlist, amp: Amplifier, machine: MachineProfile,
+def _amplifier(d: _Deck, net: Netlist, amp: Amplifier, stage: Stage, machine: MachineProfile,
                settings: SpiceSettings) -> None:
     c, imp = machine.components, machine.imperfections
     n = spice_name(amp.id)
@@ -188,8 +185,7 @@ def _amplifier(d: _Deck, net: Netlist, amp: Amplifier, machine: MachineProfile,
 
     pots = {p.id: p for p in net.pots}
     if amp.role == "differentiator":
-        T_d = amp.T_d_s if amp.T_d_s is not None else c.feedback_resistor_ohm * c.differentiator_capacitor_F
-        roll = amp.rolloff_s if amp.rolloff_s is not None else imp.differentiator_rolloff_s
+        T_d, roll = stage.T_d_s, stage.rolloff_s  # as patchgen.patch.reading resolves them
         for inp in amp.inputs:
             src = (_pot(d, net, machine, pots[inp.pot], None) if inp.pot else _source_node(net, inp.source))
             cap = inp.weight * T_d / c.feedback_resistor_ohm
@@ -211,7 +207,7 @@ def _amplifier(d: _Deck, net: Netlist, amp: Amplifier, machine: MachineProfile,
         d.add(f"C_{n}_f {sj} {fb} {num(c.integrator_capacitor_F)}")
         _capacitor_ic(d, sj, fb, amp, imp.integrator_offset_V if drift else 0.0)
     elif amp.role == "lag":
-        tau = amp.tau_s if amp.tau_s is not None else machine.time_scale_s
+        tau = stage.tau_s
         d.add(f"R_{n}_f {sj} {fb} {num(c.feedback_resistor_ohm)}",
               f"C_{n}_f {sj} {fb} {num(tau / c.feedback_resistor_ohm)}")
         _capacitor_ic(d, sj, fb, amp, 0.0)
@@ -316,6 +312,7 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     patch.data. Same inputs and seed, same bytes."""
     if machine.id != net.machine:
         raise ValueError(f"netlist is for machine {net.machine!r}, profile is {machine.id!r}")
+    reading = read(net, machine.imperfections.differentiator_rolloff_s)  # checks the wiring, too
     d = _Deck(np.random.default_rng(settings.seed))
     d.add(f"patchgen: {net.design} on {machine.name}, bench {bench.name}")
     d.comment("Written by patchgen (patchgen.spice.deck). Volts on the machine; plant nodes carry SI states.")
@@ -323,7 +320,7 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
               f"actuator {settings.actuator}")
     _sensors(d, net, bench, machine, settings)
     for amp in net.amplifiers:
-        _amplifier(d, net, amp, machine, settings)
+        _amplifier(d, net, amp, reading.amplifiers[amp.id], machine, settings)
     d.comment(f"Control voltage u_c = output of {net.output.source}")
     d.add(f"V_uc {CONTROL_NODE} {_source_node(net, net.output.source)} DC 0")
     _actuator(d, plant, bench, settings)

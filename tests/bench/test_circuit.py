@@ -6,13 +6,16 @@ from pathlib import Path
 
 import pytest
 
-from patchgen.bench.circuit import DIFFERENTIATOR, INTEGRATOR, SUMMER, AlgebraicLoopError, compile_circuit
+from patchgen.bench.circuit import DIFFERENTIATOR, INTEGRATOR, SUMMER, compile_circuit
 from patchgen.inputs.errors import InputError
 from patchgen.patch.netlist import Netlist, read_netlist
+from patchgen.patch.reading import AlgebraicLoopError
+from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
 
 ROOT = Path(__file__).resolve().parents[2]
 GP6 = load_machine("gp6")
+UW = load_bench("uw-1991")
 
 
 @pytest.fixture()
@@ -25,7 +28,7 @@ def _amp(data: dict, amp_id: str) -> dict:
 
 
 def test_ch5_compiles_as_wired(data):
-    c = compile_circuit(Netlist.model_validate(data), GP6)
+    c = compile_circuit(Netlist.model_validate(data), GP6, UW)
     assert c.sensor_ids == ("s", "theta", "s_dot")
     # integrator first (its output is a state), then feed-through amplifiers after their sources
     assert c.amp_ids[0] == "A1"
@@ -44,13 +47,13 @@ def test_ch5_compiles_as_wired(data):
 
 def test_order_does_not_depend_on_listing_order(data):
     data["amplifiers"].reverse()
-    c = compile_circuit(Netlist.model_validate(data), GP6)
+    c = compile_circuit(Netlist.model_validate(data), GP6, UW)
     assert c.amp_ids.index("A7") > c.amp_ids.index("A6")
 
 
 def test_missing_rolloff_takes_the_machine_default(data):
     _amp(data, "A5")["rolloff_s"] = None
-    c = compile_circuit(Netlist.model_validate(data), GP6)
+    c = compile_circuit(Netlist.model_validate(data), GP6, UW)
     k5 = c.amp_ids.index("A5")
     assert c.param2[k5] == pytest.approx(1.0 / GP6.imperfections.differentiator_rolloff_s)
 
@@ -58,16 +61,16 @@ def test_missing_rolloff_takes_the_machine_default(data):
 def test_algebraic_loop_is_refused(data):
     _amp(data, "A6")["inputs"].append({"source": "A7", "pot": None, "weight": 1, "jack": "x1b"})
     with pytest.raises(AlgebraicLoopError, match="algebraic loop A6 -> A7 -> A6|A7 -> A6 -> A7"):
-        compile_circuit(Netlist.model_validate(data), GP6)
+        compile_circuit(Netlist.model_validate(data), GP6, UW)
 
 
 def test_a_loop_through_an_integrator_is_fine(data):
     _amp(data, "A1")["inputs"].append({"source": "A7", "pot": None, "weight": 1, "jack": "x1b"})
-    compile_circuit(Netlist.model_validate(data), GP6)
+    compile_circuit(Netlist.model_validate(data), GP6, UW)
 
 
 def test_unknown_source_names_the_field(data):
     _amp(data, "A7")["inputs"][0]["source"] = "A9"
     with pytest.raises(InputError) as exc:
-        compile_circuit(Netlist.model_validate(data), GP6)
+        compile_circuit(Netlist.model_validate(data), GP6, UW)
     assert "inputs[0].source" in exc.value.field and "A9" in exc.value.message

@@ -86,7 +86,7 @@ def _config(design: str, scenario: str, *, ideal=False, spread=None, duration=No
     if duration:
         base["duration_s"] = duration
     bench = load_bench(d.spec.bench, d.spec.path)
-    cfg, _ = engine_config(compile_circuit(net, machine), plant_params(d.spec), bench, machine,
+    cfg, _ = engine_config(compile_circuit(net, machine, bench), plant_params(d.spec), bench, machine,
                            Scenario.model_validate(base), ideal=ideal, spread=spread)
     return cfg
 

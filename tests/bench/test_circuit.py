@@ -66,7 +66,12 @@ def test_algebraic_loop_is_refused(data):
 
 def test_a_loop_through_an_integrator_is_fine(data):
     _amp(data, "A1")["inputs"].append({"source": "A7", "pot": None, "weight": 1, "jack": "x1b"})
-    compile_circuit(Netlist.model_validate(data), GP6, UW)
+    c = compile_circuit(Netlist.model_validate(data), GP6, UW)
+    # the integrator stays first (a state), and now reads A7's output back at unit gain
+    assert c.amp_ids[0] == "A1"
+    j = c.amp_ids.index("A1")
+    inputs = dict(zip(c.in_src[c.in_ptr[j]:c.in_ptr[j + 1]], c.in_gain[c.in_ptr[j]:c.in_ptr[j + 1]]))
+    assert inputs == {c.signal_index("theta"): 1.0, c.signal_index("A7"): 1.0}
 
 
 def test_unknown_source_names_the_field(data):

@@ -6,10 +6,11 @@ import sys
 
 import numpy as np
 import pytest
+import scipy.linalg as sla
 
 from patchgen.cli.options import parse_by, parse_vary
-from patchgen.design.lqg import design
-from patchgen.inputs.spec import load_spec
+from patchgen.design.model import build_model
+from patchgen.inputs.spec import load_spec, q_matrix, r_matrix
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.machine import load_machine
 from patchgen.studies.sweep import cases, sweep
@@ -28,7 +29,17 @@ def test_rows_are_true_designs_of_the_perturbed_plant():
     assert rows[0].K == pytest.approx([-15.8114, -209.0301, -31.0045, -52.9470], abs=1e-4)
     p = spec.plant
     plant = PlantParams(M=p.M * 1.1, m=p.m, l=p.l, g=p.g, b_VF=p.b_VF, c=p.c, d=p.d)
-    np.testing.assert_allclose(rows[1].K, design(spec, plant=plant).K[0], rtol=1e-12)
+    # rows[1] is the LQR of the heavier cart, checked by its fixed point (Kleinman): the cost of
+    # u = -K x solves a Lyapunov equation, and the optimal K is the one that cost reproduces
+    m = build_model(spec, plant)
+    K = np.atleast_2d(rows[1].K)
+    Q, R = q_matrix(spec), r_matrix(spec)
+    Acl = m.A - m.B @ K
+    assert np.max(np.linalg.eigvals(Acl).real) < 0
+    P = sla.solve_continuous_lyapunov(Acl.T, -(Q + K.T @ R @ K))
+    np.testing.assert_allclose(np.linalg.solve(R, m.B.T @ P), K, rtol=1e-6)
+    # and it is not the nominal plant's gain
+    assert np.abs(K - np.atleast_2d(rows[0].K)).max() > 1e-3
     # a heavier cart needs more gain on theta (thesis 4.6: the gains change little)
     assert abs(rows[1].K[1]) > abs(rows[0].K[1])
     assert all(abs(r.K[1] / rows[0].K[1] - 1) < 0.1 for r in rows)

@@ -17,6 +17,16 @@ from patchgen.studies.sweep import VARIABLE
 SEED = click.IntRange(0, 2**63 - 1)  # numpy's generators take a non-negative 64-bit seed
 
 
+def out_option(what: str):
+    """The ``-o/--out DIR`` option every writing command takes; ``what`` says what goes there."""
+    return click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
+                        help=f"Directory for {what}.")
+
+
+# a scenario the command must be given
+SCENARIO = click.option("--scenario", "scenario_path", required=True, help="Scenario TOML (see sims/).")
+
+
 class FiniteFloat(click.ParamType):
     """A finite float within [lo, hi]."""
 

@@ -16,12 +16,12 @@ from patchgen.studies.bench_sheet import HOLD_RUNS, predicted_patch_files
 
 from . import cli
 from .inputs import load_inputs
+from .options import out_option
 
 
 @cli.command("patch")
 @click.argument("spec")
-@click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
-              help="Directory for netlist.json, pots.csv, patch-sheet.html/.md and wiring.svg.")
+@out_option("netlist.json, pots.csv, patch-sheet.html/.md and wiring.svg")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
 @click.option("--runs", "runs_hold", default=HOLD_RUNS, show_default=True, type=click.IntRange(1, 10000),
               help="Noise seeds for the 120 s hold in the sheet's bench prediction.")

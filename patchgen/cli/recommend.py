@@ -17,15 +17,14 @@ from patchgen.studies.recommend import RUNS, recommend
 
 from . import cli
 from .inputs import load_inputs, scenario_for
-from .options import SEED
+from .options import SEED, out_option
 
 RECOMMEND_FILES = PATCH_FILES + ("recommendation.md", "recommendation.json")
 
 
 @cli.command("recommend")
 @click.argument("spec")
-@click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
-              help="Directory for the recommended patch (as patchgen patch writes it).")
+@out_option("the recommended patch (as patchgen patch writes it)")
 @click.option("--runs", default=RUNS, show_default=True, type=click.IntRange(1, 100000),
               help="Monte Carlo noise seeds per realisation.")
 @click.option("--scenario", "scenario_path", default="hold-120s", show_default=True,

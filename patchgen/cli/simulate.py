@@ -20,7 +20,7 @@ from patchgen.render.outputs import check_out_dir, write_files
 
 from . import cli
 from .inputs import load_inputs, scenario_for
-from .options import SEED
+from .options import SCENARIO, SEED, out_option
 
 SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "history.svg", "netlist.json")
 
@@ -84,10 +84,8 @@ def _p(d, key: str) -> str:
 
 @cli.command("simulate")
 @click.argument("spec")
-@click.option("--scenario", "scenario_path", required=True,
-              help="Scenario TOML (see sims/).")
-@click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
-              help="Directory for history.csv, runs.csv, summary.json and the plots.")
+@SCENARIO
+@out_option("history.csv, runs.csv, summary.json and the plots")
 @click.option("--seed", type=SEED, default=None, help="Noise seed (default: the scenario's).")
 @click.option("--runs", type=click.IntRange(1, 1_000_000), default=1, show_default=True,
               help="Monte Carlo runs over noise seeds.")

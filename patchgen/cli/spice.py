@@ -24,7 +24,7 @@ from patchgen.spice.run import NgspiceError, NgspiceMissing, run_ngspice
 
 from . import cli
 from .inputs import check_spice_points, load_inputs, scenario_for
-from .options import FiniteFloat
+from .options import SCENARIO, FiniteFloat, out_option
 
 SPICE_FILES = ("patch.cir", "patch.data", "comparison.json", "overlay.png", "overlay.svg")
 
@@ -41,10 +41,8 @@ class _Own:
 
 @cli.command("spice")
 @click.argument("spec")
-@click.option("--scenario", "scenario_path", required=True,
-              help="Scenario TOML (see sims/).")
-@click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
-              help="Directory for the deck, ngspice's data, the comparison and its overlay plot.")
+@SCENARIO
+@out_option("the deck, ngspice's data, the comparison and its overlay plot")
 @click.option("--ideal", is_flag=True, help="Noise and drift off and the actuator a pure gain, as patchgen "
               "simulate --ideal; the op-amp macromodels (finite gain, output limits) stay.")
 @click.option("--step", "step_s", type=FiniteFloat(1e-5, 0.1), default=0.005, show_default=True,

@@ -24,7 +24,7 @@ from patchgen.swingup.strategies import STRATEGIES
 
 from . import cli
 from .inputs import load_inputs
-from .options import SEED, FiniteFloat
+from .options import SEED, FiniteFloat, out_option
 
 SWINGUP_FILES = PATCH_FILES + ("swingup-history.csv", "swingup-switching.csv", "swingup-switching.md", "swingup.png",
                                "swingup.svg", "manoeuvre.png", "manoeuvre.svg", "manoeuvre.json")
@@ -33,8 +33,7 @@ SHEET_HOLD_RUNS = 10  # seeds of the sheet's 120 s hold: fewer than patchgen pat
 
 @cli.command("swingup")
 @click.argument("spec")
-@click.option("-o", "--out", "out_dir", required=True, type=click.Path(file_okay=False),
-              help="Directory for the manoeuvre's histories, switching table, plots and the patch with the schedule.")
+@out_option("the manoeuvre's histories, switching table, plots and the patch with the schedule")
 @click.option("--strategy", type=click.Choice(STRATEGIES), default="supervisory", show_default=True,
               help="supervisory: section 3.3's three-phase logic on measured states; schedule: optimised "
               "open-loop switching times; energy: Astrom-Furuta energy control.")

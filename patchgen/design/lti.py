@@ -111,7 +111,7 @@ def compensator_ss(design: Design) -> control.StateSpace:
     Parameters
     ----------
     design : Design
-        A design from :func:`patchgen.design.lqg.design` or :func:`load_design`.
+        As for :func:`plant_ss`.
 
     Returns
     -------
@@ -137,7 +137,7 @@ def loop_ss(design: Design, law: Literal["compensator", "lqr"] | None = None) ->
     Parameters
     ----------
     design : Design
-        A design from :func:`patchgen.design.lqg.design` or :func:`load_design`.
+        As for :func:`plant_ss`.
     law : {"compensator", "lqr"}, optional
         ``"lqr"``: the full state feedback u = -K x on the design model (integral and actuator
         states included), the loop of ``design.lqr_margins``. ``"compensator"``: the law as
@@ -177,7 +177,7 @@ def closed_loop_ss(design: Design) -> control.StateSpace:
     Parameters
     ----------
     design : Design
-        A design from :func:`patchgen.design.lqg.design` or :func:`load_design`.
+        As for :func:`plant_ss`.
 
     Returns
     -------

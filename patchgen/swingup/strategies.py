@@ -80,6 +80,18 @@ class PumpController(Protocol):
     def force(self, t: float, x: np.ndarray) -> float: ...
 
 
+class _Pumping:
+    """What every closed-loop pump-up law keeps: its model of the plant, the force limit, its
+    settings, the upright energy it pumps towards and the switches it made."""
+
+    def __init__(self, model: PlantParams, force_limit: float, settings):
+        self.model = model
+        self.F = float(force_limit)
+        self.cfg = settings
+        self.E0 = upright_energy(model)
+        self.switches: list[Switch] = []
+
+
 # --------------------------------------------------------------------------- supervisory
 
 
@@ -95,7 +107,7 @@ class SupervisorSettings:
     reverse_at_horizontal: bool = True  # end the push when the pendulum crosses the horizontal
 
 
-class Supervisor:
+class Supervisor(_Pumping):
     """Three-phase bang-bang pump-up (section 3.3) as closed-loop logic (section 3.4).
 
     ``model`` is the plant the guards predict with (the design's model); the plant actually
@@ -103,11 +115,7 @@ class Supervisor:
     """
 
     def __init__(self, model: PlantParams, force_limit: float, settings: SupervisorSettings | None = None):
-        self.model = model
-        self.F = float(force_limit)
-        self.cfg = settings or SupervisorSettings()
-        self.E0 = upright_energy(model)
-        self.switches: list[Switch] = []
+        super().__init__(model, force_limit, settings or SupervisorSettings())
         self.phase = 0
         self.direction = 1.0
         self.series = 0
@@ -198,16 +206,12 @@ class EnergySettings:
     track_margin: float = TRACK_MARGIN
 
 
-class EnergyControl:
+class EnergyControl(_Pumping):
     """Astrom-Furuta: u = sat(k (E - E0) sign(theta_dot cos theta) - k_s s - k_v s_dot), with a
     guard that brakes the cart when its stopping point (full reverse force) nears a limit switch."""
 
     def __init__(self, model: PlantParams, force_limit: float, settings: EnergySettings | None = None):
-        self.model = model
-        self.F = float(force_limit)
-        self.cfg = settings or EnergySettings()
-        self.E0 = upright_energy(model)
-        self.switches: list[Switch] = []
+        super().__init__(model, force_limit, settings or EnergySettings())
 
     def stopping_point(self, x: np.ndarray) -> float:
         """Where the cart would stop under full reverse force (cart alone, with its friction)."""

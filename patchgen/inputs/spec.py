@@ -84,6 +84,8 @@ class WeightsSpec(InputModel):
 
 
 class IntegratorsSpec(InputModel):
+    """Which integral states the design adds (thesis 4.3: integral of s, of theta)."""
+
     int_s: bool = False
     int_theta: bool = False
     int_s_leak: Real = bounded(0, 1, default=2e-5, description="1/s, keeps the Riccati solver off the axis")
@@ -91,6 +93,8 @@ class IntegratorsSpec(InputModel):
 
 
 class EstimatorSpec(InputModel):
+    """How the unmeasured states are obtained: none, a differentiator, a reduced observer or a Kalman estimator."""
+
     kind: Literal["none", "differentiator", "filtered_differentiator", "reduced_observer", "kalman"] = "none"
     W: Entry | list[list[Entry]] = 1.0
     V: list[Entry] | list[list[Entry]] = [1.0, 1.0, 1.0]
@@ -105,6 +109,8 @@ class EstimatorSpec(InputModel):
 
 
 class PatchSpec(InputModel):
+    """Choices for the patch: slaved units and what to do with a coefficient below the dial's resolution."""
+
     units: Annotated[Int, Field(ge=1, le=16)] | Literal["auto"] = Field(
         default=1, description="machines slaved together: a number, or \"auto\" for the fewest that fit "
         "(at most the profile's max_units)")
@@ -114,6 +120,8 @@ class PatchSpec(InputModel):
 
 
 class DesignSpec(InputModel):
+    """A whole design spec as read from TOML: plant, sensors, actuator, weights, estimator, machine and bench."""
+
     name: str
     description: str = ""
     source: str = ""
@@ -161,6 +169,7 @@ def load_spec(path: str | Path) -> DesignSpec:
 
 
 def q_matrix(spec: DesignSpec) -> np.ndarray:
+    """The state weight Q over the spec's states (Bryson's rule when the spec asks for it)."""
     states = spec.states()
     n = len(states)
     w = spec.weights
@@ -180,6 +189,7 @@ def q_matrix(spec: DesignSpec) -> np.ndarray:
 
 
 def r_matrix(spec: DesignSpec) -> np.ndarray:
+    """The control weight R as a 1 x 1 matrix."""
     w = spec.weights
     if w.bryson is not None:
         return np.array([[1.0 / w.bryson["u"] ** 2]])

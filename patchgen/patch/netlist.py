@@ -44,6 +44,8 @@ class Signal(_Doc):
 
 
 class SensorInput(_Doc):
+    """A sensor voltage entering the patch: its id, what it measures and its volts per unit."""
+
     id: str = Field(description="signal id used as a source: s, theta or s_dot")
     label: str
     quantity: str
@@ -52,6 +54,8 @@ class SensorInput(_Doc):
 
 
 class AmpInput(_Doc):
+    """One patched input of an amplifier: its source, the pot in between (if any), weight and jack."""
+
     source: str = Field(description="sensor id or amplifier id whose output feeds this input")
     pot: str | None = Field(default=None, description="pot id between source and input, or none")
     weight: int = Field(gt=0, description="input weight (the profile's, e.g. 1 or 10)")
@@ -59,6 +63,8 @@ class AmpInput(_Doc):
 
 
 class Amplifier(_Doc):
+    """One amplifier as patched: role, inputs, the signal it carries and its element values."""
+
     id: str = Field(description="the machine's amplifier id (profile)")
     role: AmpRole
     inputs: list[AmpInput]
@@ -71,6 +77,8 @@ class Amplifier(_Doc):
 
 
 class Pot(_Doc):
+    """One coefficient pot: its setting, what it feeds and the coefficient it realises."""
+
     id: str
     setting: float = Field(ge=0, description="dial setting, quantised to the dial resolution")
     source: str
@@ -91,12 +99,16 @@ class Pot(_Doc):
 
 
 class ControlOutput(_Doc):
+    """Where the control voltage u_c leaves the machine for the servo amplifier."""
+
     source: str
     quantity: str = "u_c"
     K_U_N_per_V: float
 
 
 class Netlist(_Doc):
+    """Everything patched on the machine for one design, as a versioned JSON document."""
+
     schema_id: str = Field(default=SCHEMA_ID, alias="schema")
     design: str
     description: str = ""
@@ -133,6 +145,7 @@ class Netlist(_Doc):
 
 
 def read_netlist(path: str | Path) -> Netlist:
+    """A netlist from its JSON file, validated against the schema."""
     return Netlist.model_validate_json(Path(path).read_text())
 
 

@@ -21,6 +21,8 @@ DYNAMIC = ("integrator", "lag", "differentiator")
 
 @dataclass(frozen=True)
 class WiredLaw:
+    """The linear law a netlist wires: xc' = Ac xc + Bc y, u_c = Cc xc + Dc y over the sensor voltages y."""
+
     inputs: tuple[str, ...]  # sensor ids
     states: tuple[str, ...]  # amplifier ids with a state
     Ac: np.ndarray

@@ -31,6 +31,8 @@ SENSOR_LABELS = {"s": "cart position pot", "theta": "pendulum angle pot", "s_dot
 
 @dataclass(frozen=True)
 class Term:
+    """One coefficient of a block: the signal it scales and by how much (and the design's value when rounded)."""
+
     signal: str
     coeff: float
     design: float | None = None  # the design's value when coeff was changed (pot resolution)
@@ -42,6 +44,8 @@ class Term:
 
 @dataclass(frozen=True)
 class Block:
+    """A signal the machine must produce: a sum, integral, derivative or lag of terms, in volts."""
+
     name: str  # the signal it produces
     kind: str  # sum | integrate | differentiate | lag
     terms: tuple[Term, ...]

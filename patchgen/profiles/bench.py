@@ -32,10 +32,14 @@ class BenchSensors(InputModel):
 
 
 class BenchTrack(InputModel):
+    """The track: whether limit switches cut the power at its ends."""
+
     limit_switches: bool = True
 
 
 class BenchProfile(InputModel):
+    """A whole bench: read from patchgen/profiles/benches/<id>.toml or a user path."""
+
     id: str = Field(min_length=1)
     name: str
     actuator: BenchActuator

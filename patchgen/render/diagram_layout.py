@@ -16,6 +16,8 @@ from patchgen.render.diagram_symbols import amp_half_height
 
 @dataclass
 class AmpPlace:
+    """Where an amplifier sits: stage, row and its input pins."""
+
     amp: Amplifier
     stage: int
     row: int = 0
@@ -25,6 +27,8 @@ class AmpPlace:
 
 @dataclass
 class Sink:
+    """One end of a wire: an amplifier pin or pot a signal feeds."""
+
     stage: int
     ykey: tuple          # ("row", row, offset in pitches) or ("gap", gap, slot)
     target: tuple        # ("pot", pot id) | ("amp", amp id, pin offset) | ("out",)
@@ -32,6 +36,8 @@ class Sink:
 
 @dataclass
 class Net:
+    """One signal's wiring: its source, the pins it feeds, its tracks and lanes."""
+
     source: str
     stage: int
     row: int
@@ -41,6 +47,7 @@ class Net:
 
 
 def place(net: Netlist):
+    """Stages, rows, tracks and lanes of every part of a netlist's diagram, in index space."""
     level = read(net).levels()
     sensors = [s.id for s in net.sensors]
     n_stages = max([level[a.id] for a in net.amplifiers], default=0) + 2  # + sensors + output

@@ -47,6 +47,7 @@ def quantity_label(q: str) -> str:
 
 
 def signed_label(polarity: int, quantity: str) -> str:
+    """A quantity with its polarity, as the diagram writes it (a leading minus for -1)."""
     return ("+" if polarity > 0 else "−") + quantity_label(quantity)
 
 
@@ -128,16 +129,20 @@ class Terminal(Element):
 
 
 class Text(Element):
+    """A text label in the diagram's font."""
+
     def __init__(self, text: str, size: float, align: tuple[str, str], **kwargs):
         super().__init__(**kwargs)
         self.segments.append(SegmentText((0, 0), text, fontsize=size, font=FONT, align=align))
 
 
 def amp_half_height(n_inputs: int) -> float:
+    """Half the height of an amplifier symbol with this many inputs."""
     return max(0.62, (n_inputs - 1) * PIN_PITCH / 2 + 0.36)
 
 
 def label_width(amp_id: str) -> float:
+    """Width of an amplifier's id label in drawing units."""
     return len(amp_id) * 0.58 * 8.5 / 36
 
 
@@ -148,6 +153,7 @@ def pot_radius(net: Netlist) -> float:
 
 
 def pin_weights(a: Amplifier) -> list[tuple[float, int]]:
+    """Each input pin's offset and weight, top to bottom."""
     return [(0.0, inp.weight) for inp in a.inputs]
 
 
@@ -158,6 +164,7 @@ def label_offset(pins: list[tuple[float, int]]) -> float:
 
 
 def amp_width(role: str, half: float, amp_id: str, pins: list[tuple[float, int]]) -> float:
+    """Width of an amplifier symbol: its triangle plus room for the weights and label."""
     room = 0.4 if role in ("summer", "inverter") else 0.65   # two-line label needs more height
     body = max(1.05, 1.25 * half, label_offset(pins) + label_width(amp_id) + room)
     return body + (INT_BOX if role in ("integrator", "lag") else 0.0)
@@ -175,6 +182,8 @@ def dial_decimals(resolution: float) -> int:
 
 
 class Dot(Element):
+    """A junction dot where wires join."""
+
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self.segments.append(SegmentCircle((0, 0), 0.055, fill=True, lw=0.5, zorder=3))

@@ -13,6 +13,7 @@ COLUMNS = ("pot", "setting", "signal", "amplifier", "input", "weight", "coeffici
 
 
 def pot_rows(net: Netlist) -> list[dict]:
+    """One plain row per pot: setting, signal, where it goes, coefficient wanted and realised."""
     rows = []
     for p in net.pots:
         err = p.error
@@ -24,6 +25,7 @@ def pot_rows(net: Netlist) -> list[dict]:
 
 
 def pots_csv(net: Netlist) -> str:
+    """The pot table as CSV (pots.csv)."""
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
     w.writeheader()

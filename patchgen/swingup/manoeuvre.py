@@ -28,6 +28,8 @@ HOME_DEG = 3.0
 
 @dataclass
 class Manoeuvre:
+    """A whole manoeuvre: the pump-up, the patched hold after hand-off, the zone and schedule sensitivity."""
+
     pump: SwingUpResult
     hold: SimResult | None
     hold_s: float

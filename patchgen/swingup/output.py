@@ -57,6 +57,7 @@ def compact_schedule_rows(result: SwingUpResult) -> tuple[list[str], list[list[s
 
 
 def switching_table_markdown(result: SwingUpResult) -> str:
+    """The switching table as a Markdown table."""
     rows = patch_sheet_rows(result)
     lines = ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
     lines += ["| " + " | ".join(r) + " |" for r in rows[1:]]

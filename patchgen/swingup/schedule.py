@@ -33,6 +33,8 @@ PARAMETERS = ("M", "m", "l", "b_VF", "c")
 
 @dataclass(frozen=True)
 class ScheduleSettings:
+    """Tuning of the schedule optimiser: its search bounds and finite-difference step."""
+
     zone_margin: float = 0.8      # x(T_F) must satisfy V < zone_margin * r
     track_margin: float = 0.95    # |s| < track_margin * d/2 along the way
     step_s: float = 2e-3          # grid of the batch simulation

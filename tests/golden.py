@@ -7,7 +7,11 @@ LAPACK, numpy), so a golden file is never compared byte for byte.
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
+
+# a number as text writes it: sign, digits, decimals, exponent
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 def assert_matches(got: Any, want: Any, rtol: float, atol: float, where: str = "$") -> None:
@@ -29,3 +33,15 @@ def assert_matches(got: Any, want: Any, rtol: float, atol: float, where: str = "
         assert abs(got - want) <= atol + rtol * abs(want), f"{where}: {got!r} != {want!r} (rtol {rtol}, atol {atol})"
     else:
         assert type(got) is type(want) and got == want, f"{where}: {got!r} != {want!r}"
+
+
+def assert_text_matches(got: str, want: str, rtol: float, atol: float, where: str = "text") -> None:
+    """Text equal to ``want`` but for its numbers, each within ``atol + rtol * |want|``: the words,
+    markup and layout exactly, the figures to a tolerance."""
+    got_words, want_words = NUMBER.split(got), NUMBER.split(want)
+    got_nums, want_nums = NUMBER.findall(got), NUMBER.findall(want)
+    assert len(got_nums) == len(want_nums), f"{where}: {len(got_nums)} numbers != {len(want_nums)}"
+    for i, (g, w) in enumerate(zip(got_words, want_words)):
+        assert g == w, f"{where}: text differs before number {i}: {g[-60:]!r} != {w[-60:]!r}"
+    for i, (g, w) in enumerate(zip(got_nums, want_nums)):
+        assert abs(float(g) - float(w)) <= atol + rtol * abs(float(w)), f"{where}: number {i}: {g} != {w}"

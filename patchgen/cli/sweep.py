@@ -35,9 +35,9 @@ def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: s
     margins, the pots that would change, and how the nominal patch (as wired) does on that plant."""
     names, by = parse_vary(vary), parse_by(by_text)
     sp, machine, bench = load_inputs(spec)
-    scenario_for(scenario_path, sp, runs)  # a bad scenario fails here, in one line
+    scenario = scenario_for(scenario_path, sp, runs)  # a bad scenario fails here, in one line
     d = design_on(sp, machine, bench)
-    rows = sweep(d.spec, machine, names, by, workers, scenario_path, runs, bench=bench)
+    rows = sweep(d.spec, machine, names, by, workers, scenario, runs, bench=bench)
     states = list(d.states)
     if as_json:
         click.echo(json.dumps([r.as_dict() for r in rows], indent=2, sort_keys=True, allow_nan=False))

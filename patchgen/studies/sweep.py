@@ -11,6 +11,7 @@ from patchgen.design.lqg import design_on
 from patchgen.design.margins import Margins
 from patchgen.design.model import plant_params
 from patchgen.inputs.errors import InputError
+from patchgen.inputs.scenario import Scenario
 from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.build import build_patch
 from patchgen.profiles.bench import BenchProfile
@@ -55,12 +56,10 @@ def cases(names: list[str], by: float, both_signs: bool = True) -> list[tuple[st
     return out
 
 
-def _outcome(net, plant, machine, bench, scenario_path, runs) -> dict:
+def _outcome(net, plant, machine, bench, sc: Scenario, runs) -> dict:
     """The nominal patch (as wired) on this plant, with the bench actuator, noise and drift."""
     from patchgen.bench.simulate import simulate
-    from patchgen.inputs.scenario import load_scenario
 
-    sc = load_scenario(scenario_path)
     r = simulate(net, plant, bench, machine, sc, runs=runs, keep_history=False)
     return {"scenario": sc.name, "runs": runs, "fraction_held": r.distribution.fraction_held,
             "max_abs_theta_deg": max(x.max_abs_theta_deg for x in r.runs),
@@ -68,7 +67,7 @@ def _outcome(net, plant, machine, bench, scenario_path, runs) -> dict:
 
 
 def _row(args) -> SweepRow:
-    spec, machine, bench, label, factors, nominal_pots, nominal_net, scenario_path, runs = args
+    spec, machine, bench, label, factors, nominal_pots, nominal_net, scenario, runs = args
     plant = plant_params(spec).scaled(**factors)
     d = design_on(spec, machine, bench, plant=plant)
     changes: dict[str, tuple[float, float]] = {}
@@ -81,14 +80,14 @@ def _row(args) -> SweepRow:
     except InputError as exc:
         err = exc.message
     outcome = None
-    if nominal_net is not None and scenario_path is not None:
-        outcome = _outcome(nominal_net, plant, machine, bench, scenario_path, runs)
+    if nominal_net is not None and scenario is not None:
+        outcome = _outcome(nominal_net, plant, machine, bench, scenario, runs)
     return SweepRow(label=label, factors=factors, K=[float(k) for k in d.K[0]], lqr_margins=d.lqr_margins,
                     lqg_margins=d.lqg_margins, pot_changes=changes, patch_error=err, outcome=outcome)
 
 
 def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float, workers: int = 0,
-          scenario_path=None, runs: int = 1, *, bench: BenchProfile | None = None) -> list[SweepRow]:
+          scenario: Scenario | None = None, runs: int = 1, *, bench: BenchProfile | None = None) -> list[SweepRow]:
     """Design for each perturbed plant (see :func:`cases`), rows spread over the computer's cores.
 
     Parameters
@@ -103,8 +102,9 @@ def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float
         Relative change, 0 < by < 1.
     workers : int
         Processes; 0: one per core.
-    scenario_path : str, optional
-        With a scenario, each row also predicts how the nominal patch (as wired) does on that plant.
+    scenario : Scenario, optional
+        With a scenario (loaded by the caller), each row also predicts how the nominal patch (as
+        wired) does on that plant.
     runs : int
         Noise seeds per row for that prediction.
     bench : BenchProfile, optional
@@ -116,7 +116,7 @@ def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float
     list of SweepRow
         In the order of :func:`cases`.
     """
-    if scenario_path is not None and bench is None:
+    if scenario is not None and bench is None:
         raise ValueError("a sweep's predicted outcome simulates the bench: pass the bench profile")
     nominal = design_on(spec, machine, bench)
     try:
@@ -124,7 +124,7 @@ def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float
         nominal_pots = {p.id: p.setting for p in net.pots}
     except InputError:
         net, nominal_pots = None, {}
-    jobs = [(spec, machine, bench, label, f, nominal_pots, net, scenario_path, runs) for label, f in cases(names, by)]
+    jobs = [(spec, machine, bench, label, f, nominal_pots, net, scenario, runs) for label, f in cases(names, by)]
     if workers == 1 or len(jobs) < PARALLEL_FROM:
         return [_row(j) for j in jobs]
     with ProcessPoolExecutor(max_workers=workers or None) as ex:

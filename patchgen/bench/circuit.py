@@ -20,7 +20,7 @@ import numpy as np
 
 from patchgen.inputs.errors import InputError
 from patchgen.patch.netlist import Netlist
-from patchgen.patch.reading import read
+from patchgen.patch.reading import Stage, read
 from patchgen.plant.equations import PLANT_STATES
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
@@ -110,9 +110,9 @@ def compile_circuit(net: Netlist, machine: MachineProfile, bench: BenchProfile) 
         in_gain += [f.gain for f in a.feeds]
         ptr.append(len(in_src))
         ic.append(a.ic_V)
-        p1.append({INTEGRATOR: 1.0 / (a.T_s or 1.0), LAG: 1.0 / (a.tau_s or 1.0),
-                   DIFFERENTIATOR: (a.T_d_s or 0.0) / (a.rolloff_s or 1.0)}.get(kd, 0.0))
-        p2.append(1.0 / a.rolloff_s if kd == DIFFERENTIATOR else 0.0)
+        q1, q2 = _params(a)
+        p1.append(q1)
+        p2.append(q2)
 
     return Circuit(
         design=net.design,
@@ -129,3 +129,14 @@ def compile_circuit(net: Netlist, machine: MachineProfile, bench: BenchProfile) 
         ic_V=np.array(ic, dtype=np.float64),
         output_index=index[reading.output],
     )
+
+
+def _params(a: Stage) -> tuple[float, float]:
+    """param1, param2 of one amplifier (see Circuit): the rates its element values give."""
+    if a.role == "integrator":
+        return 1.0 / a.T_s, 0.0
+    if a.role == "lag":
+        return 1.0 / a.tau_s, 0.0
+    if a.role == "differentiator":
+        return a.T_d_s / a.rolloff_s, 1.0 / a.rolloff_s
+    return 0.0, 0.0

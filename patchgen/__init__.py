@@ -6,7 +6,9 @@ The Python API (docs/api.md) is loaded on first use, so ``import patchgen`` stay
 - :func:`plant_ss`, :func:`compensator_ss`, :func:`loop_ss`, :func:`closed_loop_ss` that design
   as ``control.StateSpace`` objects with named signals;
 - :func:`design_on` the design stage on a loaded spec and profiles (no file read); the stage
-  itself is :func:`patchgen.design.lqg.design` (``patchgen.design`` is the design folder).
+  itself is :func:`patchgen.design.lqg.design` (``patchgen.design`` is the design folder);
+- :func:`loop_margins` exact gain, phase and delay margins of a loop (A, B, C, D), found without
+  a frequency grid.
 """
 
 __version__ = "0.2.0"
@@ -18,6 +20,7 @@ _LAZY = {
     "loop_ss": "patchgen.design.lti",
     "closed_loop_ss": "patchgen.design.lti",
     "load_spec": "patchgen.inputs.spec",
+    "loop_margins": "patchgen.design.margins",
     "design_on": "patchgen.design.lqg",
 }
 

@@ -64,3 +64,61 @@ def test_half_cost_check_leaves_gain_limits_out():
     assert m.upper_gm is None and m.lower_gm is None and m.phase_crossovers == []
     assert m.stable and m.pm_deg == pytest.approx(
         control.stability_margins(control.tf([10], np.polymul(np.polymul([1, 1], [1, 2]), [1, 3])))[1], abs=1e-4)
+
+
+@pytest.mark.parametrize("num, den, lower, upper, pm, pm_w", [
+    ([1], [1, 0], None, None, 90.0, 1.0),                                     # 1/s: PM 90 deg at 1 rad/s
+    ([2], [1, -1], 0.5, None, 60.0, math.sqrt(3)),                            # 2/(s-1)
+    ([1], np.polymul([1, 0], np.polymul([1, 1], [1, 1])), None, 2.0, None, None),  # 1/(s(s+1)^2): GM 2 at 1
+    ([4], np.polymul([1, 0], np.polymul([1, 1], [1, 2])), None, 1.5, None, None),  # 4/(s(s+1)(s+2)): 1.5 at sqrt 2
+])
+def test_analytic_loops_even_on_round_frequencies(num, den, lower, upper, pm, pm_w):
+    """Crossings that fall exactly on 1 rad/s or sqrt(2) are found: no grid to fall between."""
+    m = loop_margins(*_abc(num, den))
+    assert m.stable
+    assert m.lower_gm == (None if lower is None else pytest.approx(lower, rel=1e-9))
+    assert m.upper_gm == (None if upper is None else pytest.approx(upper, rel=1e-9))
+    if pm is not None:
+        assert m.pm_deg == pytest.approx(pm, abs=1e-7) and m.pm_freq == pytest.approx(pm_w, rel=1e-9)
+
+
+def test_delay_margin_of_two_over_s_minus_one():
+    m = loop_margins(*_abc([2], [1, -1]))
+    assert m.delay_margin_s == pytest.approx(math.radians(60) / math.sqrt(3), rel=1e-9)  # 0.6046 s
+    assert round(m.delay_margin_s, 4) == 0.6046
+
+
+def test_crossings_far_outside_any_grid_are_seen():
+    # 1e7/(s + 1e-7)... a loop crossing 0 dB at 1e7 rad/s and a pole at 1e-7 rad/s
+    m = loop_margins(*_abc([1e7], [1, 1e-7]))
+    assert m.gain_crossovers == pytest.approx([math.sqrt(1e14 - 1e-14)], rel=1e-6)
+    assert m.pm_deg == pytest.approx(90.0, abs=1e-4)
+
+
+def test_a_tiny_gain_loop_has_no_crossover_and_no_spurious_one():
+    m = loop_margins(*_abc([1e-6], np.polymul([1, 1], [1, 2])))
+    assert m.stable and m.gain_crossovers == [] and m.pm_deg is None
+    assert m.upper_gm is None and m.lower_gm is None
+
+
+def test_a_double_integrator_with_a_zero_has_no_false_lower_margin():
+    # (s + 0.1)/(s^2 (s + 1)): the closed loop s^3 + s^2 + k s + 0.1 k is stable for every k > 0
+    # (Routh: 0.9 k > 0 and 0.1 k > 0), so there is no gain limit either way
+    A, B, C = _abc([1, 0.1], np.polymul([1, 0, 0], [1, 1]))
+    m = loop_margins(A, B, C)
+    assert m.stable and m.lower_gm is None and m.upper_gm is None
+    assert all(np.max(np.linalg.eigvals(A - k * B @ C).real) < 0 for k in (1e-3, 0.1, 10.0, 1e3))
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_random_stable_loops_agree_with_python_control(seed):
+    rng = np.random.default_rng(seed)
+    poles = -rng.uniform(0.2, 5.0, 3)
+    num = [rng.uniform(1, 50)]
+    den = np.poly(poles)
+    m = loop_margins(*_abc(num, den))
+    gm, pm, _, wpc, wgc, _ = control.stability_margins(control.tf(num, den))
+    if m.stable and m.upper_gm is not None:
+        assert m.upper_gm == pytest.approx(gm, rel=1e-6)
+    if m.stable and m.pm_deg is not None and np.isfinite(pm):
+        assert m.pm_deg == pytest.approx(pm, abs=1e-5)

@@ -40,6 +40,11 @@ class _Stage:
     block: Block | None
 
 
+# a coefficient this small beside its block's largest is rounding noise of the design's linear
+# algebra (double precision carries about 16 digits; a few products lose a few), not a gain
+ROUNDING_NOISE = 1e-12
+
+
 def _quantise(setting: float, res: float) -> float:
     return round(round(setting / res) * res, 12)
 
@@ -52,9 +57,14 @@ def _plan_terms(real: Realization, machine: MachineProfile, source: str):
     kept: dict[str, list[Term]] = {}
     for b in real.blocks:
         kept[b.name] = []
+        largest = max((abs(t.coeff) for t in b.terms), default=0.0)
         for t in b.terms:
             mag = abs(t.coeff)
             if mag == 0:
+                continue
+            if mag <= ROUNDING_NOISE * largest:
+                notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is rounding noise "
+                             f"({mag / largest:.1e} of the block's largest); left out")
                 continue
             top = max(machine.input_weights)
             if mag > top * machine.pot_max + 1e-12:

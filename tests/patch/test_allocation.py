@@ -72,3 +72,26 @@ def test_weight_is_the_smallest_that_reaches():
     assert weight_for(0.5, GP6) == 1 and weight_for(1.0, GP6) == 1
     assert weight_for(1.0001, GP6) == 10 and weight_for(9.99, GP6) == 10
     assert weight_for(12.0, GP6) == 10  # the largest when none does (the allocator then refuses)
+
+
+@pytest.mark.parametrize("policy", ["minimum", "round", "omit"])
+def test_rounding_noise_is_no_coefficient(policy):
+    """A term zero to rounding beside its block gets no pot, whatever the resolution policy."""
+    real = Realization("unit", dict(SENSORS), (
+        Block("u_c", "sum", (Term("s", 0.3), Term("theta", -2.5), Term("s_dot", 3.9e-16)), 1.0, "V", "control"),),
+        14.01, policy)
+    net = allocate(real, GP6)
+    assert {p.source for p in net.pots} == {"s", "theta"}
+    assert any("rounding noise" in n and "s_dot" in n for n in net.notes)
+    law = wired_law(net)
+    assert dict(zip(law.inputs, law.Dc[0]))["s_dot"] == 0.0
+
+
+def test_a_small_but_real_coefficient_keeps_the_minimum_setting():
+    """Section 5.3's integral gain (5.5e-7 beside 2.67) is tiny but no rounding noise: the thesis
+    wired it at the dial's minimum, and so does the 'minimum' policy."""
+    real = Realization("unit", dict(SENSORS), (
+        Block("u_c", "sum", (Term("theta", -2.67), Term("s", 5.49e-7)), 1.0, "V", "control"),), 14.01, "minimum")
+    net = allocate(real, GP6)
+    assert {p.source for p in net.pots} == {"s", "theta"}
+    assert dict(zip(wired_law(net).inputs, wired_law(net).Dc[0]))["s"] == pytest.approx(GP6.pot_resolution)

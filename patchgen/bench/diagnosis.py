@@ -1,30 +1,61 @@
 """Why a patch holds or not: the wired loop linearised about upright, with the bench's actuator
 (its lag) and with the ideal actuator the design may have assumed. The dead zone and the limits
-are not linear; the simulation shows them."""
+are not linear; the simulation shows them.
+
+The verdict has three values. Stable: every pole left of the axis by more than MARGINAL_TOL.
+Unstable: a pole right of it. Marginal: the rightmost pole on the axis within that tolerance; a
+pole at the origin then means a conserved quantity, named from the pole's left eigenvector (the
+plant conserves g/l ∫θ - θ̇ - c/(m l²) θ - ṡ/l whatever the force, so a pure integral of θ leaves
+such a pole that no pot can move).
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from patchgen.bench.circuit import sensor_constants
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import wired_law
 from patchgen.plant.equations import PlantParams, linear_matrices
 from patchgen.profiles.bench import BenchProfile
 
+# 1/s: a pole within this of the imaginary axis is on it (the eigenvalue solver's error on these
+# loops, of order 1e-12, is far below it; the slowest real mode of a patch, 1e-5 1/s leaks, above)
+MARGINAL_TOL = 1e-7
+# the weight below which a state is left out of a conserved quantity's name, relative to the largest
+NAMED_WEIGHT = 1e-6
+
 
 @dataclass(frozen=True)
 class LoopPoles:
-    """The closed-loop poles (1/s) of the wired loop with one actuator model, named in words."""
+    """The closed-loop poles (1/s) of the wired loop with one actuator model, named in words.
+
+    ``conserved`` is the quantity a pole at the origin keeps constant, as the weight of each
+    state (the largest 1; empty when there is no such pole).
+    """
 
     actuator: str
     poles: np.ndarray
+    conserved: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def conserved_text(self) -> str:
+        """The conserved quantity written out: weight and state name, term by term."""
+        text = " ".join(f"{'-' if c < 0 else '+'} {abs(c):.4g} {n}" for n, c in self.conserved.items())
+        return text.removeprefix("+ ")
+
+    @property
+    def verdict(self) -> str:
+        """"stable", "marginal" (rightmost pole on the axis within MARGINAL_TOL) or "unstable"."""
+        r = float(np.max(self.poles.real))
+        return "stable" if r < -MARGINAL_TOL else ("marginal" if r <= MARGINAL_TOL else "unstable")
 
     @property
     def stable(self) -> bool:
-        """Every pole in the open left half-plane."""
-        return bool(np.max(self.poles.real) < 0)
+        """Every pole left of the axis by more than MARGINAL_TOL."""
+        return self.verdict == "stable"
 
     @property
     def worst(self) -> complex:
@@ -35,12 +66,14 @@ class LoopPoles:
         """One line for a terminal: the actuator, stable or not, the rightmost pole."""
         w = self.worst
         pole = f"{w.real:+.3f}" + (f" ± {abs(w.imag):.3f}j" if abs(w.imag) > 1e-9 else "")
-        verdict = "stable" if self.stable else "UNSTABLE"
-        return f"wired loop with the {self.actuator}: {verdict} (rightmost pole {pole} 1/s)"
+        verdict = {"stable": "stable", "marginal": "MARGINAL", "unstable": "UNSTABLE"}[self.verdict]
+        why = f"; it conserves {self.conserved_text}" if self.conserved else ""
+        return f"wired loop with the {self.actuator}: {verdict} (rightmost pole {pole} 1/s{why})"
 
 
-def linear_loop_poles(net: Netlist, plant: PlantParams, K_U: float, tau: float | None) -> np.ndarray:
-    """Closed-loop poles of plant + wired controller + actuator, linearised about upright.
+def linear_loop(net: Netlist, plant: PlantParams, bench: BenchProfile, tau: float | None
+                ) -> tuple[np.ndarray, list[str]]:
+    """The closed loop of plant + wired controller + actuator, linearised about upright.
 
     Parameters
     ----------
@@ -48,23 +81,25 @@ def linear_loop_poles(net: Netlist, plant: PlantParams, K_U: float, tau: float |
         The patch; its controller is read back as wired (patchgen.patch.readback).
     plant : PlantParams
         The plant (eq. 2.28).
-    K_U : float
-        The actuator's gain (N/V).
+    bench : BenchProfile
+        The bench: its actuator gain K_U and its sensors' constants.
     tau : float or None
         The actuator's lag (s); None for a pure gain.
 
     Returns
     -------
-    numpy.ndarray
-        The poles (1/s), complex.
+    (numpy.ndarray, list of str)
+        The closed loop's A and its states' names (plant, actuator if any, then the wired states).
     """
     law = wired_law(net)
     Ap, Bp = linear_matrices(plant)
+    K_U = bench.actuator.K_U
     ks = np.zeros((len(law.inputs), 4))
     names = ["s", "theta", "s_dot", "theta_dot"]
+    gains = dict(zip((s.id for s in net.sensors), sensor_constants(net, bench)))
     for r, sid in enumerate(law.inputs):
         sensor = next(s for s in net.sensors if s.id == sid)
-        ks[r, names.index(sensor.quantity)] = sensor.volts_per_unit
+        ks[r, names.index(sensor.quantity)] = gains[sid]
     nc = law.Ac.shape[0]
     # u_c = Cc xc + Dc ks x
     if tau is None:
@@ -82,7 +117,18 @@ def linear_loop_poles(net: Netlist, plant: PlantParams, K_U: float, tau: float |
         A[4, 5:] = (K_U * law.Cc)[0] / tau
         A[5:, :4] = law.Bc @ ks
         A[5:, 5:] = law.Ac
-    return np.linalg.eigvals(A)
+    return A, names + ([] if tau is None else ["actuator"]) + list(law.states)
+
+
+def loop_poles(A: np.ndarray, names: list[str], actuator: str) -> LoopPoles:
+    """The poles of a closed loop and, for a pole at the origin, the quantity it conserves."""
+    lam, W = np.linalg.eig(A.T)  # left eigenvectors of A: w' A = lam w'
+    conserved: dict[str, float] = {}
+    k = int(np.argmin(np.abs(lam)))
+    if abs(lam[k]) <= MARGINAL_TOL:
+        w = (W[:, k] / W[np.argmax(np.abs(W[:, k])), k]).real
+        conserved = {n: float(c) for c, n in zip(w, names) if abs(c) > NAMED_WEIGHT}
+    return LoopPoles(actuator, lam, conserved)
 
 
 def diagnose(net: Netlist, plant: PlantParams, bench: BenchProfile) -> list[LoopPoles]:
@@ -95,7 +141,7 @@ def diagnose(net: Netlist, plant: PlantParams, bench: BenchProfile) -> list[Loop
         The ideal actuator first, then the bench's (a lag model with tau > 0).
     """
     act = bench.actuator
-    out = [LoopPoles("ideal actuator (pure gain K_U)", linear_loop_poles(net, plant, act.K_U, None))]
+    out = [loop_poles(*linear_loop(net, plant, bench, None), "ideal actuator (pure gain K_U)")]
     if act.model != "gain" and act.tau > 0:
-        out.append(LoopPoles(f"bench actuator (lag {act.tau:g} s)", linear_loop_poles(net, plant, act.K_U, act.tau)))
+        out.append(loop_poles(*linear_loop(net, plant, bench, act.tau), f"bench actuator (lag {act.tau:g} s)"))
     return out

@@ -38,9 +38,18 @@ def test_linearised_ch5_loop_matches_conventions():
     # the wired patch (differentiator roll-off, x10 inputs, pot rounding) is unstable too
     d, m = design_from_path(design_path("thesis-ch5"))
     net = build_patch(d, m)
-    ideal, lag = diagnose(net, plant_params(d.spec), load_bench("uw-1991"))
-    assert ideal.stable and not lag.stable
-    assert lag.worst.real > 0.3
+    plant = plant_params(d.spec)
+    ideal, lag = diagnose(net, plant, load_bench("uw-1991"))
+    assert lag.verdict == "unstable" and lag.worst.real > 0.3
+    # with the ideal actuator the loop is marginal, not stable: the plant conserves
+    # g/l int(theta) - theta_dot - c/(m l^2) theta - s_dot/l whatever the force, and the pure
+    # integral of theta (A1) leaves that mode at the origin, where no pot can move it
+    assert ideal.verdict == "marginal" and not ideal.stable
+    w = ideal.conserved
+    assert set(w) == {"theta", "s_dot", "theta_dot", "A1"}
+    assert w["s_dot"] / w["theta_dot"] == pytest.approx(1 / plant.l, rel=1e-6)
+    assert w["theta"] / w["theta_dot"] == pytest.approx(plant.c / (plant.m * plant.l ** 2), rel=1e-6)
+    assert "it conserves" in ideal.line() and "MARGINAL" in ideal.line()
 
 
 def test_bad_scenario_field_one_line(tmp_path):

@@ -45,8 +45,9 @@ def recommend_cmd(spec, out_dir, runs, scenario_path, seed, as_json, force):
             task, description=f"Monte Carlo: {label}", completed=done, total=total))
     best = rec.best
     if best is None:
-        raise InputError(sp.path, "estimator", "no realisation fits the machine: "
-                         + "; ".join(f"{c.label}: {c.error}" for c in rec.ranked))
+        raise InputError(sp.path, "estimator", "no realisation fits the machine with a wired loop stable on the "
+                         "bench: " + "; ".join(f"{c.label}: {c.error or f'wired loop {c.bench_loop} on the bench'}"
+                                               for c in rec.ranked))
     files = recommendation_files(rec, machine, bench)
     written = write_files(out_dir, files, force=force)
     if as_json:

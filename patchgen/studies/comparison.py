@@ -33,6 +33,7 @@ def table_rows(rec: Recommendation) -> list[dict]:
             "upper_gm_db": None if m is None or not m.stable else m.upper_gm_db,
             "pm_deg": c.pm_deg,
             "loop_stable": None if m is None else m.stable,
+            "bench_loop": c.bench_loop,
             "worst_swing_V": c.worst_swing_V,
             "amplifiers": c.amplifiers,
             "pots": c.pots,

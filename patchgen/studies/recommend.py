@@ -20,6 +20,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
+from patchgen.bench.diagnosis import diagnose
 from patchgen.bench.simulate import RunSummary, simulate
 from patchgen.design.lqg import Design, design_on
 from patchgen.design.model import plant_params
@@ -66,6 +67,7 @@ class Candidate:
     worst_swing_V: float | None = None  # largest |amplifier output| over the runs' peaks
     estimator_detail: str = ""
     results: tuple[RunSummary, ...] = field(default=(), repr=False, compare=False)  # the Monte Carlo's runs
+    bench_loop: str | None = None  # the wired loop's linear verdict on the bench: stable, marginal, unstable
 
     @property
     def gm_db(self) -> float | None:
@@ -93,17 +95,20 @@ class Candidate:
         return None if self.netlist is None else len(self.netlist.pots)
 
     def rank_key(self, order: int) -> tuple:
-        """Sort key, best first: simulated, runs held, fewer units, gain margin, phase margin,
-        smaller swing, then ``order`` (the candidate's place in CANDIDATES)."""
+        """Sort key, best first: simulated, a wired loop that is stable on the bench (a marginal or
+        unstable one ranks below every stable one, whatever its runs did), runs held, fewer
+        units, gain margin, phase margin, smaller swing, then ``order`` (the candidate's place in
+        CANDIDATES)."""
         if self.fraction_ok is None:
-            return (1, 0.0, 0, 0.0, 0.0, 0.0, order)
+            return (1, 1, 0.0, 0, 0.0, 0.0, 0.0, order)
         def r(x):  # larger margins first; none (unstable loop) after every margin
             if x is not None and math.isfinite(x):
                 return -round(x, MARGIN_DIGITS)
             return INFINITE_MARGIN if x else 0.0
 
         units = self.netlist.units if self.netlist is not None else 1
-        return (0, -round(self.fraction_ok, FRACTION_DIGITS), units, r(self.gm_db), r(self.pm_deg),
+        return (0, 0 if self.bench_loop == "stable" else 1, -round(self.fraction_ok, FRACTION_DIGITS), units,
+                r(self.gm_db), r(self.pm_deg),
                 round(self.worst_swing_V or 0.0, SWING_DIGITS), order)
 
 
@@ -119,9 +124,11 @@ class Recommendation:
 
     @property
     def best(self) -> Candidate | None:
-        """The first-ranked candidate, if it was simulated."""
+        """The first-ranked candidate, if it was simulated and its wired loop is stable on the
+        bench: a loop that is not is never chosen, whatever its runs did."""
         b = self.ranked[0] if self.ranked else None
-        return b if b is not None and b.netlist is not None and b.fraction_ok is not None else None
+        ok = b is not None and b.netlist is not None and b.fraction_ok is not None and b.bench_loop == "stable"
+        return b if ok else None
 
 
 def candidate_specs(spec: DesignSpec) -> list[tuple[str, str, DesignSpec]]:
@@ -197,7 +204,8 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
         ``c`` with its bench figures: runs held (no overload), fallen, tripped, overloaded,
         worst swing (the rails when any run overloaded) and the runs themselves.
     """
-    res = simulate(c.netlist, plant_params(c.design.spec), bench, machine, scenario, seed=seed, runs=runs,
+    plant = plant_params(c.design.spec)
+    res = simulate(c.netlist, plant, bench, machine, scenario, seed=seed, runs=runs,
                    keep_history=True, progress=progress)
     D = res.distribution
     ok = sum(1 for r in res.runs if r.held and not r.overloads) / len(res.runs)
@@ -207,7 +215,8 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
         swing = max(swing, machine.imperfections.saturation_V)
     return replace(c, error=None, runs=runs, fraction_ok=ok, fraction_fallen=D.fraction_fallen,
                    fraction_tripped=D.fraction_tripped, fraction_overloaded=D.fraction_overloaded,
-                   worst_swing_V=swing, results=tuple(res.runs))
+                   worst_swing_V=swing, results=tuple(res.runs),
+                   bench_loop=diagnose(c.netlist, plant, bench)[-1].verdict)
 
 
 def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenario: Scenario,

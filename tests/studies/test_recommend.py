@@ -21,7 +21,7 @@ from patchgen.patch.netlist import read_netlist
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
 from patchgen.studies.comparison import table_rows
-from patchgen.studies.recommend import Candidate, recommend
+from patchgen.studies.recommend import Candidate, Recommendation, recommend
 from tests.conftest import ROOT, design_path
 from tests.patch.test_patch_roundtrip import check_roundtrip
 
@@ -94,13 +94,26 @@ def test_ranking_is_deterministic():
 def test_rank_key_orders_by_outcome_then_margin_then_swing():
     d, _ = design_from_path(design_path("thesis-ch5"))
     base = dict(design=d, netlist=None, error=None, runs=10, fraction_fallen=0.0, fraction_tripped=0.0,
-                fraction_overloaded=0.0)
+                fraction_overloaded=0.0, bench_loop="stable")
     better = Candidate(label="a", kind="x", fraction_ok=0.9, worst_swing_V=9.0, **base)
     worse = Candidate(label="b", kind="x", fraction_ok=0.8, worst_swing_V=1.0, **base)
     calmer = Candidate(label="c", kind="x", fraction_ok=0.9, worst_swing_V=2.0, **base)
     unsim = Candidate(label="d", kind="x", design=None, netlist=None, error="does not fit")
     got = sorted([unsim, worse, better, calmer], key=lambda c: c.rank_key(0))
     assert [c.label for c in got] == ["c", "a", "b", "d"]  # same outcome and margins: smaller swing
+
+
+def test_a_loop_unstable_on_the_bench_never_ranks_above_a_stable_one_nor_is_chosen():
+    d, _ = design_from_path(design_path("thesis-ch5"))
+    base = dict(design=d, netlist=None, error=None, runs=10, fraction_fallen=0.0, fraction_tripped=0.0,
+                fraction_overloaded=0.0, worst_swing_V=1.0)
+    dead = Candidate(label="dead", kind="x", fraction_ok=1.0, bench_loop="unstable", **base)
+    marginal = Candidate(label="marginal", kind="x", fraction_ok=1.0, bench_loop="marginal", **base)
+    weak = Candidate(label="weak", kind="x", fraction_ok=0.2, bench_loop="stable", **base)
+    got = sorted([dead, marginal, weak], key=lambda c: c.rank_key(0))
+    assert got[0].label == "weak"  # held less, but its loop balances the pendulum
+    only_dead = Recommendation(d.spec, None, 10, 0, (dead,))
+    assert only_dead.best is None  # "held 100 %" by a loop that cannot balance is no recommendation
 
 
 @pytest.mark.parametrize("kind", ["filtered_differentiator", "reduced_observer"])

@@ -77,9 +77,12 @@ def table_markdown(rec: Recommendation, reference_V: float) -> str:
              f"allocated and simulated on the bench ({rec.scenario.name}: {rec.scenario.description}), "
              f"{rec.runs} noise seeds from seed {rec.seed}, with the bench actuator, sensor noise and "
              "integrator drift. 'held' counts runs where the pendulum stayed up, the cart stayed inside "
-             "the limit switches and no amplifier left the rails for the whole scenario. Ranked by that, "
-             "then by the loop's gain margin (nearer limit), phase margin, and worst amplifier swing.\n\n")
-    tail = f"\nChosen: **{best.label}**.\n" if best else "\nNo candidate could be simulated.\n"
+             "the limit switches and no amplifier left the rails for the whole scenario. A wired loop that is "
+             "not stable on the bench (linearised with its actuator lag) ranks below every stable one and is "
+             "never chosen; then ranked by runs held, the loop's gain margin (nearer limit), phase margin, "
+             "and worst amplifier swing.\n\n")
+    tail = (f"\nChosen: **{best.label}**.\n" if best else
+            "\nNone chosen: no candidate's wired loop is stable on the bench.\n")
     return intro + head + "\n".join(lines) + "\n" + tail
 
 
@@ -111,8 +114,8 @@ def why_section(rec: Recommendation, reference_V: float) -> SheetSection:
                      fmt_figure(r["pm_deg"], "{:.1f}"), f"{r['worst_swing_V']:.2f} of {reference_V:g}",
                      f"{r['amplifiers']}/{r['pots']}"])
     note = (f"Bench Monte Carlo: {rec.scenario.name}, {rec.runs} seeds from {rec.seed}, bench actuator, noise and "
-            "drift. Ranked by runs held (up, inside the switches, no overload), then gain margin, phase margin, "
-            "worst swing." + (" Not fitting: " + "; ".join(misfits) + "." if misfits else ""))
+            "drift. A wired loop not stable on the bench ranks last and is never chosen; then ranked by runs held "
+            "(up, inside the switches, no overload), gain margin, phase margin, worst swing." + (" Not fitting: " + "; ".join(misfits) + "." if misfits else ""))
     return SheetSection("Why this patch", header, rows, note)
 
 

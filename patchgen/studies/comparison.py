@@ -115,7 +115,8 @@ def why_section(rec: Recommendation, reference_V: float) -> SheetSection:
                      f"{r['amplifiers']}/{r['pots']}"])
     note = (f"Bench Monte Carlo: {rec.scenario.name}, {rec.runs} seeds from {rec.seed}, bench actuator, noise and "
             "drift. A wired loop not stable on the bench ranks last and is never chosen; then ranked by runs held "
-            "(up, inside the switches, no overload), gain margin, phase margin, worst swing." + (" Not fitting: " + "; ".join(misfits) + "." if misfits else ""))
+            "(up, inside the switches, no overload), gain margin, phase margin, worst swing."
+            + (" Not fitting: " + "; ".join(misfits) + "." if misfits else ""))
     return SheetSection("Why this patch", header, rows, note)
 
 

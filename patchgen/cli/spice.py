@@ -68,7 +68,7 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_js
     drift_on = (not ideal) and scenario.drift != "off" and scenario.drift != 0
     settings = SpiceSettings(duration_s=scenario.duration_s, step_s=step_s, x0=tuple(scenario.initial.vector()),
                              noise=noise_on, drift=drift_on, actuator="ideal" if ideal else "bench",
-                             seed=scenario.seed)
+                             seed=scenario.seed, disturbances=tuple(scenario.disturbances))
     deck = spice_deck(net, plant, bench, machine, settings)
     files: dict[str, str | bytes] = {"patch.cir": deck.text}
     for name, data in deck.files.items():

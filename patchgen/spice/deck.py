@@ -25,6 +25,7 @@ from typing import Literal
 import numpy as np
 
 from patchgen.bench.circuit import sensor_constants
+from patchgen.inputs.scenario import Disturbance
 from patchgen.patch.netlist import Amplifier, Netlist, Pot
 from patchgen.patch.reading import Stage, read
 from patchgen.plant.equations import PLANT_STATES, PlantParams
@@ -49,6 +50,8 @@ INSTALL_HINT = ("install ngspice (Debian/Ubuntu: apt-get install ngspice) and ma
 # Plant state nodes, in PLANT_STATES order; their voltages are the states in SI units.
 STATE_NODES = {"s": "x_s", "theta": "x_theta", "s_dot": "x_sdot", "theta_dot": "x_thetadot"}
 FORCE_NODE = "f_cart"
+S_REF_NODE = "s_ref"  # the cart-position reference a step disturbance moves
+EDGE_S = 1e-6  # s: the rise and fall of a push or step in the deck (the simulator's are sharp)
 CONTROL_NODE = "u_c"
 
 
@@ -58,7 +61,8 @@ class SpiceSettings:
 
     ``x0`` is [s, theta, s_dot, theta_dot] in SI units. ``actuator`` "bench" uses the bench
     profile's actuator (lag, dead zone, force limit, limit switches); "ideal" is F = K_U u_c.
-    ``max_step_s`` bounds ngspice's time step (default: the output step).
+    ``max_step_s`` bounds ngspice's time step (default: the output step). ``disturbances`` are
+    the scenario's pushes (on the cart or the pendulum tip) and cart-position steps, as sources.
     """
 
     duration_s: float
@@ -70,6 +74,7 @@ class SpiceSettings:
     max_step_s: float | None = None
     seed: int = 1
     reltol: float = 1e-5
+    disturbances: tuple[Disturbance, ...] = ()
 
 
 
@@ -137,7 +142,10 @@ def _sensors(d: _Deck, net: Netlist, bench: BenchProfile, machine: MachineProfil
         node = f"sens_{spice_name(s.id)}"
         rms = bench.sensors.noise_V_rms.get(s.id, 0.0) if settings.noise else 0.0
         clean = f"{node}_clean" if rms > 0 else node
-        volts = clamp(f"{num(k)}*v({STATE_NODES[s.id]})", machine.reference_V)
+        state = f"v({STATE_NODES[s.id]})"
+        if s.id == "s" and any(x.kind == "step" for x in settings.disturbances):
+            state = f"({state}-v({S_REF_NODE}))"  # a step moves the reference the s sensor is read against
+        volts = clamp(f"{num(k)}*{state}", machine.reference_V)
         d.add(f"B_sens_{spice_name(s.id)} {clean} 0 V = {volts}")
         if rms > 0:
             _noise_source(d, f"E_sens_{spice_name(s.id)}_noise", node, clean, rms,
@@ -261,15 +269,42 @@ def _actuator(d: _Deck, plant: PlantParams, bench: BenchProfile, settings: Spice
 
 
 
-def _plant(d: _Deck, plant: PlantParams, settings: SpiceSettings) -> None:
-    """Eq. 2.16-2.19 with theta_dot^2 in the centripetal term (as patchgen.plant.equations.nonlinear_rhs)."""
+def _disturbances(d: _Deck, settings: SpiceSettings) -> dict[str, str]:
+    """A source per push or step of the scenario (a rectangle or a step with EDGE_S edges, as the
+    simulator applies them); returns the cart push, tip push and reference expressions ('' for
+    none) and writes the reference node when there is a step."""
+    parts: dict[str, list[str]] = {"cart": [], "tip": [], "step": []}
+    for i, x in enumerate(settings.disturbances):
+        node, t0 = f"dist_{i}", x.time_s
+        if x.kind == "step":
+            points = [(0.0, 0.0), (t0, 0.0), (t0 + EDGE_S, x.size_m)]
+            parts["step"].append(f"v({node})")
+        else:
+            t1 = t0 + x.duration_s
+            points = [(0.0, 0.0), (t0, 0.0), (t0 + EDGE_S, x.force_N), (t1, x.force_N), (t1 + EDGE_S, 0.0)]
+            parts["tip" if x.at == "pendulum_tip" else "cart"].append(f"v({node})")
+        points = [pt for k, pt in enumerate(points) if k == 0 or pt[0] > points[k - 1][0]]  # a push at t = 0
+        d.comment(f"Disturbance {i}: {x.kind} at {t0} s")
+        d.add(f"V_{node} {node} 0 PWL(" + " ".join(f"{num(t)} {num(v)}" for t, v in points) + ")")
+    if parts["step"]:
+        d.add(f"B_sref {S_REF_NODE} 0 V = " + "+".join(parts["step"]))
+    return {k: "+".join(v) for k, v in parts.items()}
+
+
+def _plant(d: _Deck, plant: PlantParams, settings: SpiceSettings, push: dict[str, str]) -> None:
+    """Eq. 2.16-2.19 with theta_dot^2 in the centripetal term (as patchgen.plant.equations.nonlinear_rhs),
+    with the pushes of the scenario on the cart and, at distance l, on the pendulum tip
+    (generalised forces F_tip on s and F_tip l cos(theta) on theta, as the simulator's)."""
     M, m, l, g, b, c = (num(v) for v in (plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c))
     th, sd, thd = (f"v({STATE_NODES[k]})" for k in ("theta", "s_dot", "theta_dot"))
     d.comment(f"Cart-pendulum, eq. 2.16-2.19: M {plant.M} kg, m {plant.m} kg, l {plant.l} m, "
               f"b_VF {plant.b_VF} kg/s, c {plant.c} kg m^2/s")
+    cart = f" + {push['cart']}" if push["cart"] else ""
+    tip_s = f" + ({push['tip']})*sin({th})*sin({th})" if push["tip"] else ""
+    tip_th = f" + ({push['tip']})*cos({th})/({m}*{l})" if push["tip"] else ""
     d.add(f"B_sdd x_sdd 0 V = (-{b}*{sd} + {m}*{l}*{thd}*{thd}*sin({th}) + ({c}/{l})*{thd}*cos({th})"
-          f" - {m}*{g}*sin({th})*cos({th}) + v({FORCE_NODE})) / (({M}+{m}) - {m}*cos({th})*cos({th}))",
-          f"B_thdd x_thdd 0 V = -({c}/({m}*{l}*{l}))*{thd} + ({g}/{l})*sin({th}) - cos({th})*v(x_sdd)/{l}")
+          f" - {m}*{g}*sin({th})*cos({th}) + v({FORCE_NODE}){cart}{tip_s}) / (({M}+{m}) - {m}*cos({th})*cos({th}))",
+          f"B_thdd x_thdd 0 V = -({c}/({m}*{l}*{l}))*{thd} + ({g}/{l})*sin({th}){tip_th} - cos({th})*v(x_sdd)/{l}")
     x0 = dict(zip(PLANT_STATES, settings.x0))
     _state_integrator(d, STATE_NODES["s"], sd, x0["s"])
     _state_integrator(d, STATE_NODES["theta"], thd, x0["theta"])
@@ -324,7 +359,7 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     d.comment(f"Control voltage u_c = output of {net.output.source}")
     d.add(f"V_uc {CONTROL_NODE} {_source_node(net, net.output.source)} DC 0")
     _actuator(d, plant, bench, settings)
-    _plant(d, plant, settings)
+    _plant(d, plant, settings, _disturbances(d, settings))
 
     max_step = settings.max_step_s or settings.step_s
     files: dict[str, str] = {}

@@ -75,6 +75,23 @@ def test_spice_ideal_agrees_within_one_percent(tmp_path, name):
     assert (tmp_path / "overlay.svg").exists() and (tmp_path / "patch.cir").exists()
 
 
+@pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
+@pytest.mark.parametrize("name", ["thesis-ch5", "bench-recommended"])
+@pytest.mark.parametrize("scenario", ["finger-push", "step-cart"])
+def test_spice_ideal_agrees_with_pushes_and_steps(tmp_path, name, scenario):
+    """The scenario's push or step is in the deck: ngspice and patchgen see the same disturbance."""
+    r = run("spice", name, "--scenario", scenario, "--ideal", "-o", str(tmp_path), "--json")
+    assert r.returncode == 0, r.stderr
+    rep = json.loads(r.stdout)
+    assert rep["agrees"] and all(v["max_rel"] < 0.01 for v in rep["signals"].values()), rep
+    deck = (tmp_path / "patch.cir").read_text()
+    assert "V_dist_0 dist_0 0 PWL(" in deck
+    if scenario == "step-cart":
+        assert "v(s_ref)" in deck and rep["signals"]["s"]["peak"] > 0.15  # the cart goes to 0.2 m
+    else:
+        assert "cos(v(x_theta))/(" in deck  # the push acts on the pendulum tip
+
+
 def test_spice_without_ngspice_writes_deck_and_exits_3(tmp_path):
     env_path = str(tmp_path / "empty")
     (tmp_path / "empty").mkdir()

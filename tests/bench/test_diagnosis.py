@@ -42,3 +42,17 @@ def test_the_verdict_reads_the_bench_sensors_not_the_netlists():
     b = [np.sort_complex(lp.poles) for lp in diagnose(rescaled, plant, bench)]
     for x, y in zip(a, b):
         np.testing.assert_allclose(x, y, rtol=1e-9, atol=1e-12)
+
+
+def test_the_hold_scenario_fails_a_patch_that_cannot_balance_and_passes_one_that_can():
+    """hold-120s starts off upright and pushes twice: 'held' means the patch balanced the pendulum."""
+    from patchgen.bench.simulate import simulate
+    from patchgen.inputs.scenario import load_scenario
+
+    sc = load_scenario("hold-120s")
+    assert sc.initial.vector()[1] != 0.0 and len(sc.disturbances) >= 2
+    machine = load_machine("gp6")
+    for name, held in (("thesis-ch5", 0.0), ("bench-recommended", 1.0)):
+        net, plant, bench = _patch(name)
+        r = simulate(net, plant, bench, machine, sc, runs=8, keep_history=False)
+        assert r.distribution.fraction_held == held, name

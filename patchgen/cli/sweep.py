@@ -64,6 +64,7 @@ def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: s
             cells.append(", ".join(f"{p} {a:.3f}→{b:.3f}" for p, (a, b) in sorted(r.pot_changes.items())) or "none")
         o = r.outcome
         cells.append("-" if o is None else
-                     f"held {100 * o['fraction_held']:.0f} %, max |θ| {o['max_abs_theta_deg']:.1f}°")
+                     f"loop {o['bench_loop']}, held {100 * o['fraction_held']:.0f} %, "
+                     f"max |θ| {o['max_abs_theta_deg']:.1f}°")
         t.add_row(*cells)
     Console(width=max(160, Console().width)).print(t)

@@ -57,11 +57,15 @@ def cases(names: list[str], by: float, both_signs: bool = True) -> list[tuple[st
 
 
 def _outcome(net, plant, machine, bench, sc: Scenario, runs) -> dict:
-    """The nominal patch (as wired) on this plant, with the bench actuator, noise and drift."""
+    """The nominal patch (as wired) on this plant, with the bench actuator, noise and drift, and
+    the wired loop's linear verdict on the bench (patchgen.bench.diagnosis, as simulate, the
+    sheet and recommend give it)."""
+    from patchgen.bench.diagnosis import diagnose
     from patchgen.bench.simulate import simulate
 
     r = simulate(net, plant, bench, machine, sc, runs=runs, keep_history=False)
     return {"scenario": sc.name, "runs": runs, "fraction_held": r.distribution.fraction_held,
+            "bench_loop": diagnose(net, plant, bench)[-1].verdict,
             "max_abs_theta_deg": max(x.max_abs_theta_deg for x in r.runs),
             "max_abs_s_m": max(x.max_abs_s_m for x in r.runs)}
 

@@ -73,3 +73,14 @@ def test_cli_json_and_bad_vary():
     r = subprocess.run([sys.executable, "-m", "patchgen", "sweep", "thesis-case1", "--vary", "Mx"],
                        capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 2 and "Mx" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_sweep_gives_the_wired_loops_bench_verdict():
+    """Section 5.3's patch stays unstable on the bench with the cart 10 % heavier or lighter."""
+    from patchgen.inputs.scenario import load_scenario
+    from patchgen.profiles.bench import load_bench
+
+    spec = load_spec(design_path("thesis-ch5"))
+    rows = sweep(spec, load_machine("gp6"), ["M"], 0.1, workers=1, scenario=load_scenario("offset-10deg"), runs=1,
+                 bench=load_bench("uw-1991"))
+    assert [r.outcome["bench_loop"] for r in rows] == ["unstable"] * 4

@@ -51,7 +51,7 @@ def _quantise(setting: float, res: float) -> float:
 
 def _plan_terms(real: Realization, machine: MachineProfile):
     """Apply the pot-resolution policy; returns kept terms per block and notes."""
-    res = machine.pot_resolution
+    res, reading = machine.pot_resolution, machine.procedure.pot_reading
     notes: list[str] = []
     too_big: list[str] = []
     kept: dict[str, list[Term]] = {}
@@ -72,11 +72,11 @@ def _plan_terms(real: Realization, machine: MachineProfile):
                                f"one x{top} input gives")
             if mag < res / 2 or (mag < res and real.below_resolution != "round"):
                 if real.below_resolution == "minimum":
-                    notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the dial "
+                    notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the {reading} "
                                  f"resolution {res:g}; set to the minimum {res:g}, as the thesis did")
                     kept[b.name].append(Term(t.signal, math.copysign(res, t.coeff), t.coeff))
                 else:
-                    notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the dial "
+                    notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the {reading} "
                                  f"resolution {res:g}; left out")
                 continue
             kept[b.name].append(t)
@@ -279,7 +279,7 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                 design = wanted.get((st.out_signal, sk.split(":")[-1], c), c)
                 pots.append(Pot(id=pot_id, setting=q, source=src_id(sk), amplifier=slot[st.key], jack=jack,
                                 weight=w, signal=_signal_name(sk, P), coefficient=design, realized=realized,
-                                note=_pot_note(design, c)))
+                                note=_pot_note(design, c, machine.procedure.pot_reading)))
             inputs.append(AmpInput(source=src_id(sk), pot=pot_id, weight=w, jack=jack))
         b = st.block
         quantity = st.out_signal
@@ -332,7 +332,7 @@ def _signal_name(key: str, P: dict[str, int]) -> str:
     return f"{'-' if pol < 0 else ''}{key}"
 
 
-def _pot_note(design: float, used: float) -> str:
+def _pot_note(design: float, used: float, reading: str) -> str:
     if design != used:
-        return f"design {design:.3g} is below the dial: set to the minimum"
+        return f"design {design:.3g} is below the {reading}: set to the minimum"
     return ""

@@ -86,9 +86,12 @@ class Step(InputModel):
 
 class Procedure(InputModel):
     """How a patch is run on this machine, as its manual words it: the operating steps a netlist
-    carries, the bench checklist a sheet prints, and how a pot is set (the pot table's title)."""
+    carries, the bench checklist a sheet prints, how a pot is set (the pot table's title) and what
+    its setting is read on (the sheet's pot table)."""
 
     pot_setting: str = Field(min_length=1, max_length=200)
+    pot_reading: str = Field(min_length=1, max_length=100,
+                             description="what a pot's setting is read on, e.g. 'dial' or 'panel meter'")
     operation: list[Step] = Field(min_length=1, max_length=50)
     checklist: list[Step] = Field(min_length=1, max_length=50)
 

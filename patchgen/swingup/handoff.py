@@ -19,6 +19,13 @@ from patchgen.plant.equations import PlantParams, linear_matrices
 from patchgen.plant.step import rk4_step
 
 STATE_COUNT = 4
+# the zone's level sits this far below the first failing start: sampling finds the boundary only
+# to within the gaps between its samples, so a 10 % margin keeps the zone inside it
+ZONE_SHRINK = 0.9
+SAMPLED_ANGLE_RAD = 0.5  # the sampled box's angle half-width (about 29 deg): well past the
+#                          linear design's small angles, so the boundary lies inside the box
+PROBED_ZONE_SAMPLES = 300  # starts tried one by one (each a simulated recovery): seconds, not minutes
+BATCH_ZONE_SAMPLES = 2000  # starts of the vectorised model check: cheap, so a denser sample
 
 
 def wrap_angle(theta: np.ndarray | float) -> np.ndarray | float:
@@ -83,10 +90,11 @@ def lyapunov_matrix(
 
 
 def default_spread(plant: PlantParams) -> np.ndarray:
-    """Half-widths of the sampling box: half the track, 0.5 rad, and the speeds these imply."""
+    """Half-widths of the sampling box: half the track, SAMPLED_ANGLE_RAD, and the speeds these
+    imply at the pendulum's natural frequency."""
     half_track = plant.d / 2.0
     omega = np.sqrt(plant.g / plant.l)
-    theta = 0.5
+    theta = SAMPLED_ANGLE_RAD
     return np.array([half_track, theta, half_track * omega, theta * omega])
 
 
@@ -95,9 +103,9 @@ def estimate_zone(
     P: np.ndarray,
     spread: np.ndarray,
     *,
-    n_samples: int = 300,
+    n_samples: int = PROBED_ZONE_SAMPLES,
     seed: int = 0,
-    shrink: float = 0.9,
+    shrink: float = ZONE_SHRINK,
     source: str = "sampled",
 ) -> Zone:
     """Estimate r for ``x^T P x < r``: sample starts in the box +/-spread, try them in order of
@@ -118,7 +126,7 @@ def estimate_zone(
 
 
 def zone_from_batch(
-    recovered: np.ndarray, X: np.ndarray, P: np.ndarray, *, shrink: float = 0.9, source: str = "sampled"
+    recovered: np.ndarray, X: np.ndarray, P: np.ndarray, *, shrink: float = ZONE_SHRINK, source: str = "sampled"
 ) -> Zone:
     """The zone from a batch already simulated: r below the smallest level of a failing start."""
     V = np.einsum("in,ij,jn->n", X, P, X)
@@ -168,9 +176,9 @@ def lqr_zone(
     force_limit: float,
     *,
     P: np.ndarray | None = None,
-    n_samples: int = 2000,
+    n_samples: int = BATCH_ZONE_SAMPLES,
     seed: int = 0,
-    shrink: float = 0.9,
+    shrink: float = ZONE_SHRINK,
     test: RecoveryTest = RecoveryTest(),
 ) -> Zone:
     """Default zone from a linear design: a Lyapunov level set of A-BK, its level found by

@@ -17,13 +17,21 @@ from patchgen.patch.netlist import Netlist
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
-from patchgen.swingup.handoff import Zone, default_spread, estimate_zone, lyapunov_matrix, wrap_angle
+from patchgen.swingup.handoff import (
+    PROBED_ZONE_SAMPLES,
+    Zone,
+    default_spread,
+    estimate_zone,
+    lyapunov_matrix,
+    wrap_angle,
+)
 from patchgen.swingup.pumping import SwingUpResult
 from patchgen.swingup.run import optimised_schedule, swing_up
 from patchgen.swingup.schedule import SensitivityRow, schedule_sensitivity
 
 RECOVERY_S = 5.0  # a start counts as recovered if the patch holds it this long and brings theta home
-HOME_DEG = 3.0
+HOME_DEG = 3.0  # "home": within 3 degrees of upright at the end, as pumping.UPRIGHT_RAD (0.05 rad)
+BENCH_HOLD_S = 30.0  # the patched hold after hand-off: long enough for drift and noise to show
 
 
 @dataclass
@@ -48,7 +56,7 @@ def _start(x: np.ndarray, duration: float, seed: int, name: str) -> Scenario:
 
 
 def patched_zone(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, K4: np.ndarray,
-                 force_limit: float, n_samples: int = 300, seed: int = 0) -> Zone:
+                 force_limit: float, n_samples: int = PROBED_ZONE_SAMPLES, seed: int = 0) -> Zone:
     """The zone of control of the patched controller on the bench: a level set of the linear
     design's closed-loop cost (P), its level found by simulating the patched circuit (bench
     actuator, noise and drift) from sampled starts and stopping at the first it does not recover."""
@@ -64,7 +72,7 @@ def patched_zone(net: Netlist, plant: PlantParams, bench: BenchProfile, machine:
 
 
 def manoeuvre(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, K4: np.ndarray,
-              strategy: str, force_limit: float, hold_s: float = 30.0, seed: int = 0,
+              strategy: str, force_limit: float, hold_s: float = BENCH_HOLD_S, seed: int = 0,
               ideal: bool = False) -> Manoeuvre:
     """Pump up with ``strategy`` until the state enters the patched controller's zone, then hold
     with the patched controller for ``hold_s`` seconds on the bench."""

@@ -16,6 +16,7 @@ from patchgen.plant.equations import PlantParams
 from patchgen.swingup.handoff import Zone, lqr_zone
 from patchgen.swingup.pumping import HOLD_S, PUMP_T_MAX_S, STEP_S, SwingUpResult, saturated_state_feedback, simulate
 from patchgen.swingup.schedule import (
+    PARAMETER_ERROR,
     OptimisedSchedule,
     ScheduleSettings,
     optimise_schedule,
@@ -91,7 +92,7 @@ class StrategySummary:
 
 def robustness(
     plant: PlantParams, force_limit: float, strategy: str, K: np.ndarray, zone: Zone,
-    schedule: OptimisedSchedule | None = None, by: float = 0.10, t_max: float = PUMP_T_MAX_S,
+    schedule: OptimisedSchedule | None = None, by: float = PARAMETER_ERROR, t_max: float = PUMP_T_MAX_S,
 ) -> list[tuple[str, float, SwingUpResult]]:
     """Run a strategy designed on ``plant`` against each plant with one parameter off by +/-by."""
     return [
@@ -103,7 +104,7 @@ def robustness(
 
 def compare_strategies(
     plant: PlantParams, force_limit: float, K: np.ndarray, zone: Zone | None = None,
-    by: float = 0.10, t_max: float = PUMP_T_MAX_S,
+    by: float = PARAMETER_ERROR, t_max: float = PUMP_T_MAX_S,
 ) -> list[StrategySummary]:
     """Time to zone, max |s|, E/E0 at hand-off, and success on the 10 perturbed plants."""
     zone = default_zone(plant, K, force_limit) if zone is None else zone

@@ -56,10 +56,12 @@ class SwingUpResult:
 
     @property
     def reached(self) -> bool:
+        """Whether the state entered the hand-off zone."""
         return self.handoff_time is not None
 
     @property
     def pump(self) -> np.ndarray:
+        """Per sample: the pump-up law is in charge (before the hand-off)."""
         return ~self.holding
 
     @property
@@ -69,14 +71,17 @@ class SwingUpResult:
 
     @property
     def max_abs_s(self) -> float:
+        """Largest cart excursion over the whole run (m)."""
         return float(np.max(np.abs(self.x[:, 0])))
 
     @property
     def on_track(self) -> bool:
+        """Whether the cart stayed inside the limit switches (+/- d/2) throughout."""
         return self.max_abs_s < self.plant.d / 2.0
 
     @property
     def handoff_state(self) -> np.ndarray | None:
+        """The state when the linear controller took over (None if the zone was never reached)."""
         if self.handoff_time is None:
             return None
         return self.x[int(np.argmax(self.holding))]
@@ -123,7 +128,31 @@ def simulate(
 ) -> SwingUpResult:
     """Pump with ``controller`` until the state enters ``zone`` (or t_max), then ``hold`` for hold_s.
 
-    With ``stop_off_track`` the run ends when the cart reaches a limit switch (the bench cuts power).
+    Parameters
+    ----------
+    plant : PlantParams
+        The nonlinear plant simulated (RK4).
+    controller : PumpController
+        The pump-up law; it records its switching table.
+    zone : Zone
+        The hand-off zone.
+    strategy : str
+        The strategy's name, kept with the result.
+    force_limit : float
+        Largest force (N).
+    hold : callable, optional
+        The law after hand-off, u(t, x); without one the run ends at the hand-off.
+    x0 : array_like, optional
+        The start (default: hanging at rest, cart centred).
+    t_max, hold_s, dt : float
+        Longest pump-up, hold after hand-off and step (s): PUMP_T_MAX_S, HOLD_S, STEP_S.
+    stop_off_track : bool
+        End the run when the cart reaches a limit switch (the bench cuts power).
+
+    Returns
+    -------
+    SwingUpResult
+        Histories, switching table and hand-off time.
     """
     x = hanging_state() if x0 is None else np.array(x0, dtype=float)
     ts, xs, us, hs = [0.0], [x.copy()], [], []

@@ -17,7 +17,7 @@ from patchgen.render.outputs import check_out_dir, write_files
 from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.sheet import SheetSection
 from patchgen.studies.bench_sheet import predicted_patch_files
-from patchgen.swingup.manoeuvre import manoeuvre, plot_manoeuvre
+from patchgen.swingup.manoeuvre import BENCH_HOLD_S, manoeuvre, plot_manoeuvre
 from patchgen.swingup.output import compact_schedule_rows, output_files, patch_sheet_rows
 from patchgen.swingup.run import compare_strategies
 from patchgen.swingup.strategies import STRATEGIES
@@ -39,7 +39,7 @@ SHEET_HOLD_RUNS = 10  # seeds of the sheet's 120 s hold: fewer than patchgen pat
               "open-loop switching times; energy: Astrom-Furuta energy control.")
 @click.option("--force-limit", type=FiniteFloat(0.1, 1000), default=None,
               help="Largest force (N) for the pump-up (default: the bench actuator's limit).")
-@click.option("--hold", "hold_s", type=FiniteFloat(0.1, 3600), default=30.0, show_default=True,
+@click.option("--hold", "hold_s", type=FiniteFloat(0.1, 3600), default=BENCH_HOLD_S, show_default=True,
               help="Seconds the patched controller must hold after the hand-off (at most an hour).")
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Noise seed of the hold.")
 @click.option("--compare", is_flag=True, help="Also compare the three strategies (time to the zone, cart "

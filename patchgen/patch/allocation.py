@@ -49,9 +49,9 @@ def _quantise(setting: float, res: float) -> float:
     return round(round(setting / res) * res, 12)
 
 
-def _plan_terms(real: Realization, machine: MachineProfile, source: str):
+def _plan_terms(real: Realization, machine: MachineProfile):
     """Apply the pot-resolution policy; returns kept terms per block and notes."""
-    res = machine.pot_resolution
+    res, reading = machine.pot_resolution, machine.procedure.pot_reading
     notes: list[str] = []
     too_big: list[str] = []
     kept: dict[str, list[Term]] = {}
@@ -72,11 +72,11 @@ def _plan_terms(real: Realization, machine: MachineProfile, source: str):
                                f"one x{top} input gives")
             if mag < res / 2 or (mag < res and real.below_resolution != "round"):
                 if real.below_resolution == "minimum":
-                    notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the dial "
+                    notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the {reading} "
                                  f"resolution {res:g}; set to the minimum {res:g}, as the thesis did")
                     kept[b.name].append(Term(t.signal, math.copysign(res, t.coeff), t.coeff))
                 else:
-                    notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the dial "
+                    notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the {reading} "
                                  f"resolution {res:g}; left out")
                 continue
             kept[b.name].append(t)
@@ -97,8 +97,8 @@ def _plan_terms(real: Realization, machine: MachineProfile, source: str):
     return blocks, kept, notes, too_big
 
 
-def _jacks_fit(blocks: list[Block], kept: dict[str, list[Term]], P: dict[str, int], inv: set[str],
-               pre: dict[str, set[str]], machine: MachineProfile | None) -> bool:
+def _jacks_fit(blocks: list[Block], kept: dict[str, list[Term]], pre: dict[str, set[str]],
+               machine: MachineProfile | None) -> bool:
     """Whether every stage's x1 and x10 inputs fit the roomiest amplifier of the machine."""
     if machine is None:
         return True
@@ -139,7 +139,7 @@ def _search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachinePr
                 cost = (len(inv) + len(pre), len(inv))
                 if best is not None and cost >= best[0]:
                     continue
-                if _jacks_fit(blocks, kept, P, set(inv), {b: mism[b] - set(inv) for b in pre}, machine):
+                if _jacks_fit(blocks, kept, {b: mism[b] - set(inv) for b in pre}, machine):
                     best = (cost, P, set(inv), {b: mism[b] - set(inv) for b in pre})
     if best is None:  # nothing fits the jacks: keep the cheapest, the emitter names the shortfall
         return _search(blocks, kept, None)
@@ -148,7 +148,7 @@ def _search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachinePr
 
 def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>") -> Netlist:
     """Place the realization on the machine; a shortfall raises ResourceError (one line)."""
-    blocks, kept, notes, too_big = _plan_terms(real, machine, source)
+    blocks, kept, notes, too_big = _plan_terms(real, machine)
     _check_lower_bound(blocks, kept, machine, source)
     P, inverted, _ = _search(blocks, kept, machine)
     stages: list[_Stage] = []
@@ -172,7 +172,7 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
         stages.append(_Stage(b.name, ROLE[b.kind], tuple(direct), b.name, P[b.name], b))
     for sig in sorted(inverted):
         stages.insert(0, _Stage(f"inv:{sig}", "inverter", ((sig, None, 1.0),), sig, -P.get(sig, 1), None))
-    _check_resources(stages, machine, real, source)
+    _check_resources(stages, machine, source)
     if too_big:
         raise ResourceError(source, "machine", too_big[0] + f" ({len(too_big)} such coefficients)")
     return _emit(real, machine, stages, P, notes, wanted)
@@ -193,7 +193,7 @@ def _check_lower_bound(blocks: list[Block], kept: dict[str, list[Term]], machine
                             f"{machine.pot_count} pots")
 
 
-def _check_resources(stages: list[_Stage], machine: MachineProfile, real: Realization, source: str) -> None:
+def _check_resources(stages: list[_Stage], machine: MachineProfile, source: str) -> None:
     need_int = sum(1 for s in stages if SLOT_ROLE[s.role] == "integrator")
     need_amp = len(stages)
     need_pot = sum(1 for s in stages for (_, _, c) in s.terms if c is not None and _needs_pot(abs(c), machine))
@@ -239,7 +239,6 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
           notes: list[str], wanted: dict[tuple[str, str, float], float]) -> Netlist:
     slot = _assign_slots(stages, machine)
     res = machine.pot_resolution
-    by_key = {s.key: s for s in stages}
     sensors = [SensorInput(id=s, label=SENSOR_LABELS[s], quantity=s, unit=SENSOR_UNITS[s], volts_per_unit=v)
                for s, v in real.sensors.items()]
     blocks = {b.name: b for b in real.blocks}
@@ -255,7 +254,7 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
     for st in sorted(stages, key=lambda s: [a.id for a in machine.amplifiers].index(slot[s.key])):
         inputs: list[AmpInput] = []
         used = {w: 0 for w in machine.input_weights}
-        for (sk, have, c) in st.terms:
+        for (sk, _, c) in st.terms:
             if c is None:  # pre-summer into its block
                 w, setting = min(machine.input_weights), None
             else:
@@ -277,11 +276,10 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                 # out_pol * signal; the source arrives with polarity `have`
                 sign_c = 1 if c > 0 else -1
                 realized = sign_c * q * w
+                design = wanted.get((st.out_signal, sk.split(":")[-1], c), c)
                 pots.append(Pot(id=pot_id, setting=q, source=src_id(sk), amplifier=slot[st.key], jack=jack,
-                                weight=w, signal=_signal_name(sk, have, by_key, P),
-                                coefficient=wanted.get((st.out_signal, sk.split(":")[-1], c), c),
-                                realized=realized,
-                                note=_pot_note(wanted.get((st.out_signal, sk.split(":")[-1], c), c), c)))
+                                weight=w, signal=_signal_name(sk, P), coefficient=design, realized=realized,
+                                note=_pot_note(design, c, machine.procedure.pot_reading)))
             inputs.append(AmpInput(source=src_id(sk), pot=pot_id, weight=w, jack=jack))
         b = st.block
         quantity = st.out_signal
@@ -324,7 +322,7 @@ def _next_pot(pots: list[Pot], amp_id: str, machine: MachineProfile) -> str:
     return f"U{unit}.P{used[unit] + 1}"
 
 
-def _signal_name(key: str, have: int | None, by_key: dict[str, _Stage], P: dict[str, int]) -> str:
+def _signal_name(key: str, P: dict[str, int]) -> str:
     if key.startswith("inv:"):
         sig = key[4:]
         return f"{'-' if -P.get(sig, 1) < 0 else ''}{sig}"
@@ -334,7 +332,7 @@ def _signal_name(key: str, have: int | None, by_key: dict[str, _Stage], P: dict[
     return f"{'-' if pol < 0 else ''}{key}"
 
 
-def _pot_note(design: float, used: float) -> str:
+def _pot_note(design: float, used: float, reading: str) -> str:
     if design != used:
-        return f"design {design:.3g} is below the dial: set to the minimum"
+        return f"design {design:.3g} is below the {reading}: set to the minimum"
     return ""

@@ -48,5 +48,19 @@ class BenchProfile(InputModel):
 
 
 def load_bench(name_or_path: str, source: str = "", field: str = "bench") -> BenchProfile:
-    """Load a shipped bench profile by id (e.g. 'uw-1991') or a file by path."""
+    """Load a shipped bench profile by id (e.g. 'uw-1991') or a file by path.
+
+    Parameters
+    ----------
+    name_or_path : str
+        A shipped profile's id, or the path of a profile file.
+    source, field : str
+        The file and field that named the profile (a spec and its ``bench``): an unreadable
+        profile is reported against them.
+
+    Returns
+    -------
+    BenchProfile
+        The checked profile; a bad value raises InputError naming the profile file and field.
+    """
     return load_profile(BenchProfile, name_or_path, "bench", source, field)

@@ -23,6 +23,7 @@ class AmplifierSlot(InputModel):
         description="count of inputs per weight, keys 'x1', 'x10'")
 
     def input_count(self, weight: int) -> int:
+        """How many inputs of weight ``weight`` (1 for x1) this amplifier has; 0 if none."""
         return self.inputs.get(f"x{weight}", 0)
 
 
@@ -86,15 +87,35 @@ class Step(InputModel):
 
 class Procedure(InputModel):
     """How a patch is run on this machine, as its manual words it: the operating steps a netlist
-    carries, the bench checklist a sheet prints, and how a pot is set (the pot table's title)."""
+    carries, the bench checklist a sheet prints, how a pot is set (the pot table's title) and what
+    its setting is read on (the sheet's pot table)."""
 
     pot_setting: str = Field(min_length=1, max_length=200)
+    pot_reading: str = Field(min_length=1, max_length=100,
+                             description="what a pot's setting is read on, e.g. 'dial' or 'panel meter'")
     operation: list[Step] = Field(min_length=1, max_length=50)
     checklist: list[Step] = Field(min_length=1, max_length=50)
 
     def steps(self, which: str, *, machine: str, units: int, resolution: float, reference_V: float,
               integrators: tuple[str, ...], signs: bool) -> list[str]:
-        """The ``which`` ("operation" or "checklist") steps that apply to a patch, filled in."""
+        """The steps of one list that apply to a patch, placeholders filled in.
+
+        Parameters
+        ----------
+        which : {"operation", "checklist"}
+            The netlist's operating steps or the sheet's bench checklist.
+        machine, units, resolution, reference_V
+            The patch's machine name, slaved units, pot resolution and reference (V).
+        integrators : tuple of str
+            Ids of the patch's integrators and lags (the ``integrators`` steps apply when any).
+        signs : bool
+            Whether the sheet has a sign table (chooses the ``signs`` or ``no_signs`` steps).
+
+        Returns
+        -------
+        list of str
+            The steps, in the profile's order.
+        """
         applies = {"always": True, "integrators": bool(integrators), "signs": signs, "no_signs": not signs}
         values = {"machine": machine, "units": f", {units} units slaved together" if units > 1 else "",
                   "resolution": f"{resolution:g}", "reference_V": f"{reference_V:g}",
@@ -137,7 +158,19 @@ class MachineProfile(InputModel):
 
 
 def load_machine(name_or_path: str, source: str = "", field: str = "machine") -> MachineProfile:
-    """Load a shipped profile by id (e.g. 'gp6') or a profile file by path."""
+    """Load a shipped profile by id (e.g. 'gp6') or a profile file by path.
+
+    Parameters
+    ----------
+    name_or_path, source, field : str
+        As for patchgen.profiles.bench.load_bench, the field being the spec's ``machine``.
+
+    Returns
+    -------
+    MachineProfile
+        The checked profile (amplifier ids unique, input keys among the weights); a bad value
+        raises InputError naming the profile file and field.
+    """
     return load_profile(MachineProfile, name_or_path, "machine", source, field, check=_check_amplifiers)
 
 

@@ -150,6 +150,7 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "notes": list(net.notes),
         "sections": summary.sections,
         "resolution": f"{net.pot_resolution:g}",
+        "pot_reading": procedure.pot_reading,
         "output_amp": net.output.source,
     }
 

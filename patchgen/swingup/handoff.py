@@ -19,6 +19,13 @@ from patchgen.plant.equations import PlantParams, linear_matrices
 from patchgen.plant.step import rk4_step
 
 STATE_COUNT = 4
+# the zone's level sits this far below the first failing start: sampling finds the boundary only
+# to within the gaps between its samples, so a 10 % margin keeps the zone inside it
+ZONE_SHRINK = 0.9
+SAMPLED_ANGLE_RAD = 0.5  # the sampled box's angle half-width (about 29 deg): well past the
+#                          linear design's small angles, so the boundary lies inside the box
+PROBED_ZONE_SAMPLES = 300  # starts tried one by one (each a simulated recovery): seconds, not minutes
+BATCH_ZONE_SAMPLES = 2000  # starts of the vectorised model check: cheap, so a denser sample
 
 
 def wrap_angle(theta: np.ndarray | float) -> np.ndarray | float:
@@ -52,6 +59,7 @@ class Zone:
         return np.einsum("in,ij,jn->n", y, self.P, y)
 
     def contains(self, x: np.ndarray) -> bool | np.ndarray:
+        """Whether a state (4,) is in the zone, or which of a batch (4, N) are."""
         inside = np.asarray(self.value(x)) < self.r
         if self.half_widths is not None:
             y = wrapped(x)
@@ -73,7 +81,24 @@ def lyapunov_matrix(
 ) -> np.ndarray:
     """P with (A-BK)^T P + P (A-BK) = -(Q_L + K^T K / F_max^2): the closed loop's cost-to-go for
     states weighted by Q_L = diag(weights) (default 1/spread^2) and force by the force limit,
-    so that directions that saturate the actuator count as far from upright."""
+    so that directions that saturate the actuator count as far from upright.
+
+    Parameters
+    ----------
+    plant : PlantParams
+        The plant linearised about upright.
+    K : array_like
+        State-feedback gain; its first four entries (s, theta, s_dot, theta_dot) are used.
+    force_limit : float
+        Largest force (N).
+    weights : array_like, optional
+        The diagonal of Q_L.
+
+    Returns
+    -------
+    numpy.ndarray
+        The symmetric 4 x 4 matrix P.
+    """
     A, B = linear_matrices(plant)
     k = np.asarray(K, dtype=float).ravel()[:STATE_COUNT]
     Acl = A - B @ k[None, :]
@@ -83,10 +108,11 @@ def lyapunov_matrix(
 
 
 def default_spread(plant: PlantParams) -> np.ndarray:
-    """Half-widths of the sampling box: half the track, 0.5 rad, and the speeds these imply."""
+    """Half-widths of the sampling box: half the track, SAMPLED_ANGLE_RAD, and the speeds these
+    imply at the pendulum's natural frequency."""
     half_track = plant.d / 2.0
     omega = np.sqrt(plant.g / plant.l)
-    theta = 0.5
+    theta = SAMPLED_ANGLE_RAD
     return np.array([half_track, theta, half_track * omega, theta * omega])
 
 
@@ -95,14 +121,35 @@ def estimate_zone(
     P: np.ndarray,
     spread: np.ndarray,
     *,
-    n_samples: int = 300,
+    n_samples: int = PROBED_ZONE_SAMPLES,
     seed: int = 0,
-    shrink: float = 0.9,
+    shrink: float = ZONE_SHRINK,
     source: str = "sampled",
 ) -> Zone:
     """Estimate r for ``x^T P x < r``: sample starts in the box +/-spread, try them in order of
     increasing x^T P x, and stop at the first one the controller does not recover from. The zone
-    is also cut to the sampled box: nothing outside it was tried."""
+    is also cut to the sampled box: nothing outside it was tried.
+
+    Parameters
+    ----------
+    controller_recovers : callable
+        Whether the controller recovers from a start (4,).
+    P : numpy.ndarray
+        The quadratic form of the zone.
+    spread : array_like
+        Half-widths of the sampled box.
+    n_samples, seed : int
+        How many starts, and the seed they are drawn with.
+    shrink : float
+        The level kept, as a fraction of the first failing start's.
+    source : str
+        What the zone was found with (shown with it).
+
+    Returns
+    -------
+    Zone
+        The zone, with the number of starts tried and whether one failed.
+    """
     rng = np.random.default_rng(seed)
     X = rng.uniform(-1.0, 1.0, size=(STATE_COUNT, n_samples)) * np.asarray(spread, dtype=float)[:, None]
     V = np.einsum("in,ij,jn->n", X, P, X)
@@ -118,9 +165,28 @@ def estimate_zone(
 
 
 def zone_from_batch(
-    recovered: np.ndarray, X: np.ndarray, P: np.ndarray, *, shrink: float = 0.9, source: str = "sampled"
+    recovered: np.ndarray, X: np.ndarray, P: np.ndarray, *, shrink: float = ZONE_SHRINK, source: str = "sampled"
 ) -> Zone:
-    """The zone from a batch already simulated: r below the smallest level of a failing start."""
+    """The zone from a batch already simulated: r below the smallest level of a failing start.
+
+    Parameters
+    ----------
+    recovered : numpy.ndarray of bool
+        Whether each start recovered.
+    X : numpy.ndarray
+        The starts (4, N).
+    P : numpy.ndarray
+        The quadratic form of the zone.
+    shrink : float
+        The level kept, as a fraction of the smallest failing start's.
+    source : str
+        What the zone was found with.
+
+    Returns
+    -------
+    Zone
+        The zone, cut to the box the starts span.
+    """
     V = np.einsum("in,ij,jn->n", X, P, X)
     fails = V[~recovered]
     r = float(shrink * fails.min()) if fails.size else float(V.max())
@@ -145,7 +211,26 @@ def state_feedback_recovers_batch(
     X0: np.ndarray,
     test: RecoveryTest = RecoveryTest(),
 ) -> np.ndarray:
-    """Simulate u = sat(-K x) (angle wrapped) from each column of X0 on the nonlinear plant (RK4)."""
+    """Simulate u = sat(-K x) (angle wrapped) from each column of X0 on the nonlinear plant (RK4).
+
+    Parameters
+    ----------
+    plant : PlantParams
+        The nonlinear plant.
+    K : array_like
+        State-feedback gain (its first four entries).
+    force_limit : float
+        Largest force (N).
+    X0 : numpy.ndarray
+        Starts (4, N).
+    test : RecoveryTest
+        Horizon, step and the tolerances a recovered state settles within.
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        Per start: on the track throughout and settled at the horizon.
+    """
     k = np.asarray(K, dtype=float).ravel()[:STATE_COUNT]
     x = np.array(X0, dtype=float, copy=True)
     h = test.dt_s
@@ -168,13 +253,32 @@ def lqr_zone(
     force_limit: float,
     *,
     P: np.ndarray | None = None,
-    n_samples: int = 2000,
+    n_samples: int = BATCH_ZONE_SAMPLES,
     seed: int = 0,
-    shrink: float = 0.9,
+    shrink: float = ZONE_SHRINK,
     test: RecoveryTest = RecoveryTest(),
 ) -> Zone:
     """Default zone from a linear design: a Lyapunov level set of A-BK, its level found by
-    simulating u = -K x (force-limited) on the nonlinear plant from sampled starts."""
+    simulating u = -K x (force-limited) on the nonlinear plant from sampled starts.
+
+    Parameters
+    ----------
+    plant, K, force_limit
+        As for state_feedback_recovers_batch.
+    P : numpy.ndarray, optional
+        The quadratic form (default: lyapunov_matrix of the design).
+    n_samples, seed : int
+        How many starts, and the seed they are drawn with.
+    shrink : float
+        The level kept, as a fraction of the smallest failing start's.
+    test : RecoveryTest
+        What counts as recovered.
+
+    Returns
+    -------
+    Zone
+        The hand-off zone of the linear design.
+    """
     P = lyapunov_matrix(plant, K, force_limit) if P is None else np.asarray(P, dtype=float)
     rng = np.random.default_rng(seed)
     spread = default_spread(plant)

@@ -65,8 +65,21 @@ def switching_table_markdown(result: SwingUpResult) -> str:
 
 
 def output_files(result: SwingUpResult, stem: str = "swingup", svg: bool = False) -> dict[str, bytes]:
-    """<stem>-history.csv, <stem>-switching.csv/.md and <stem>.png (and <stem>.svg with ``svg``),
-    file name -> bytes for the all-or-nothing writer."""
+    """A pump-up run's files: its history, switching table and plot.
+
+    Parameters
+    ----------
+    result : SwingUpResult
+        The run.
+    stem, svg
+        As for plot.
+
+    Returns
+    -------
+    dict of str to bytes
+        ``<stem>-history.csv``, ``<stem>-switching.csv`` and ``.md``, ``<stem>.png`` (and
+        ``<stem>.svg``), for the all-or-nothing writer.
+    """
     E = pendulum_energy(result.plant, result.x.T) / upright_energy(result.plant)
     hist = io.StringIO()
     w = csv.writer(hist, lineterminator="\n")
@@ -86,8 +99,22 @@ def output_files(result: SwingUpResult, stem: str = "swingup", svg: bool = False
 
 
 def plot(result: SwingUpResult, stem: str, svg: bool = False) -> dict[str, bytes]:
-    """States, force and energy against time, with the hand-off marked: ``<stem>.png`` (and
-    ``<stem>.svg`` with ``svg``), file name -> bytes."""
+    """States, force and energy against time, with the hand-off marked.
+
+    Parameters
+    ----------
+    result : SwingUpResult
+        The run.
+    stem : str
+        File name stem.
+    svg : bool
+        Also ``<stem>.svg``.
+
+    Returns
+    -------
+    dict of str to bytes
+        ``<stem>.png`` (and ``<stem>.svg``).
+    """
     from patchgen.render import plotting
 
     t, x = result.t, result.x

@@ -17,9 +17,14 @@ from patchgen.plant.step import rk4_step
 from patchgen.swingup.handoff import Zone, wrapped
 from patchgen.swingup.strategies import PumpController, Switch, hanging_state, pendulum_energy, upright_energy
 
-PUMP_T_MAX_S = 12.0  # the longest pump-up allowed before a run counts as not reaching the zone
-HOLD_S = 5.0  # the hold after hand-off: long enough for the linear controller to show it catches
-STEP_S = 1e-3  # RK4 step: well below the pendulum's period (about 1.3 s) and the bang-bang timing
+# The run's length and step, one set for every strategy, the schedule replay and the comparison:
+PUMP_T_MAX_S = 12.0  # longest pump-up before a run counts as not reaching the zone: over twice the
+#                      thesis's 5.2 s pump-up with 15 N (Table 3.1), room for a weaker force limit
+HOLD_S = 5.0  # hold after hand-off: ten times the 0.5 s window the thesis found for it (3.5), long
+#               enough to tell a catch from a miss
+STEP_S = 1e-3  # RK4 step: a thousandth of the pendulum's period (about 1.3 s, Table B.1), so the
+#                bang-bang switching times fall within 1 ms, finer than Table 3.1's 0.01 s
+UPRIGHT_RAD = 0.05  # "held" at the end: within about 3 degrees of upright
 
 
 def saturated_state_feedback(K: np.ndarray, force_limit: float) -> Callable[[float, np.ndarray], float]:
@@ -51,10 +56,12 @@ class SwingUpResult:
 
     @property
     def reached(self) -> bool:
+        """Whether the state entered the hand-off zone."""
         return self.handoff_time is not None
 
     @property
     def pump(self) -> np.ndarray:
+        """Per sample: the pump-up law is in charge (before the hand-off)."""
         return ~self.holding
 
     @property
@@ -64,14 +71,17 @@ class SwingUpResult:
 
     @property
     def max_abs_s(self) -> float:
+        """Largest cart excursion over the whole run (m)."""
         return float(np.max(np.abs(self.x[:, 0])))
 
     @property
     def on_track(self) -> bool:
+        """Whether the cart stayed inside the limit switches (+/- d/2) throughout."""
         return self.max_abs_s < self.plant.d / 2.0
 
     @property
     def handoff_state(self) -> np.ndarray | None:
+        """The state when the linear controller took over (None if the zone was never reached)."""
         if self.handoff_time is None:
             return None
         return self.x[int(np.argmax(self.holding))]
@@ -84,9 +94,9 @@ class SwingUpResult:
 
     @property
     def held(self) -> bool:
-        """Balanced at the end: upright within 0.05 rad and on the track throughout."""
+        """Balanced at the end: upright within UPRIGHT_RAD and on the track throughout."""
         end = wrapped(self.x[-1])
-        return self.reached and self.on_track and abs(end[1]) < 0.05 and abs(end[0]) < self.plant.d / 2.0
+        return self.reached and self.on_track and abs(end[1]) < UPRIGHT_RAD and abs(end[0]) < self.plant.d / 2.0
 
     def table_rows(self) -> list[dict]:
         """The switching table as rows (series, phase, force, time), ending with the hand-off."""
@@ -118,7 +128,31 @@ def simulate(
 ) -> SwingUpResult:
     """Pump with ``controller`` until the state enters ``zone`` (or t_max), then ``hold`` for hold_s.
 
-    With ``stop_off_track`` the run ends when the cart reaches a limit switch (the bench cuts power).
+    Parameters
+    ----------
+    plant : PlantParams
+        The nonlinear plant simulated (RK4).
+    controller : PumpController
+        The pump-up law; it records its switching table.
+    zone : Zone
+        The hand-off zone.
+    strategy : str
+        The strategy's name, kept with the result.
+    force_limit : float
+        Largest force (N).
+    hold : callable, optional
+        The law after hand-off, u(t, x); without one the run ends at the hand-off.
+    x0 : array_like, optional
+        The start (default: hanging at rest, cart centred).
+    t_max, hold_s, dt : float
+        Longest pump-up, hold after hand-off and step (s): PUMP_T_MAX_S, HOLD_S, STEP_S.
+    stop_off_track : bool
+        End the run when the cart reaches a limit switch (the bench cuts power).
+
+    Returns
+    -------
+    SwingUpResult
+        Histories, switching table and hand-off time.
     """
     x = hanging_state() if x0 is None else np.array(x0, dtype=float)
     ts, xs, us, hs = [0.0], [x.copy()], [], []

@@ -16,6 +16,7 @@ from patchgen.plant.equations import PlantParams
 from patchgen.swingup.handoff import Zone, lqr_zone
 from patchgen.swingup.pumping import HOLD_S, PUMP_T_MAX_S, STEP_S, SwingUpResult, saturated_state_feedback, simulate
 from patchgen.swingup.schedule import (
+    PARAMETER_ERROR,
     OptimisedSchedule,
     ScheduleSettings,
     optimise_schedule,
@@ -44,9 +45,33 @@ def swing_up(
     hold_s: float = HOLD_S,
     dt: float = STEP_S,
 ) -> SwingUpResult:
-    """Full manoeuvre on ``plant``; the strategy's logic (and any schedule) uses ``model``
-    (default: the plant itself). For 'schedule' without a given schedule, the supervisory run on
-    the model seeds the optimisation."""
+    """Full manoeuvre on ``plant``: pump up from hanging, hand off to sat(-K x) in the zone, hold.
+
+    Parameters
+    ----------
+    plant : PlantParams
+        The plant simulated.
+    force_limit : float
+        Largest force (N).
+    strategy : {"supervisory", "schedule", "energy"}
+        The pump-up law.
+    K : array_like
+        State-feedback gain of the linear controller (its first four entries).
+    zone : Zone, optional
+        The hand-off zone (default: default_zone on the model).
+    model : PlantParams, optional
+        The plant the strategy's logic and schedule are worked out on (default: ``plant``).
+    schedule : OptimisedSchedule, optional
+        For 'schedule': the table to replay; without one, the supervisory run on the model seeds
+        the optimisation.
+    t_max, hold_s, dt : float
+        Longest pump-up, hold after hand-off and step (s).
+
+    Returns
+    -------
+    SwingUpResult
+        The run; for 'schedule' its notes carry the predicted and seed final times.
+    """
     if strategy not in STRATEGIES:
         raise ValueError(f"unknown strategy {strategy!r} (known: {', '.join(STRATEGIES)})")
     model = plant if model is None else model
@@ -68,7 +93,24 @@ def swing_up(
 def optimised_schedule(
     model: PlantParams, force_limit: float, zone: Zone, settings: ScheduleSettings | None = None
 ) -> OptimisedSchedule:
-    """The supervisory table on the model, then the minimum-time switching times from it."""
+    """The supervisory table on the model, then the minimum-time switching times from it.
+
+    Parameters
+    ----------
+    model : PlantParams
+        The plant the schedule is worked out on.
+    force_limit : float
+        Largest force (N).
+    zone : Zone
+        The hand-off zone the schedule must end in.
+    settings : ScheduleSettings, optional
+        The optimiser's tuning.
+
+    Returns
+    -------
+    OptimisedSchedule
+        The schedule, its predicted final time and the seed's.
+    """
     seed_run = simulate(model, Supervisor(model, force_limit), zone, strategy="supervisory",
                         force_limit=force_limit, hold=None)
     seed, T = schedule_from_result(seed_run)
@@ -91,9 +133,26 @@ class StrategySummary:
 
 def robustness(
     plant: PlantParams, force_limit: float, strategy: str, K: np.ndarray, zone: Zone,
-    schedule: OptimisedSchedule | None = None, by: float = 0.10, t_max: float = PUMP_T_MAX_S,
+    schedule: OptimisedSchedule | None = None, by: float = PARAMETER_ERROR, t_max: float = PUMP_T_MAX_S,
 ) -> list[tuple[str, float, SwingUpResult]]:
-    """Run a strategy designed on ``plant`` against each plant with one parameter off by +/-by."""
+    """Run a strategy designed on ``plant`` against each plant with one parameter off by +/-by.
+
+    Parameters
+    ----------
+    plant : PlantParams
+        The nominal plant: the model the strategy works with.
+    force_limit, strategy, K, zone, schedule
+        As for swing_up.
+    by : float
+        The fractional error of each parameter in turn (PARAMETER_ERROR).
+    t_max : float
+        Longest pump-up (s).
+
+    Returns
+    -------
+    list of (str, float, SwingUpResult)
+        Parameter name, its factor, and the pump-up on that plant (no hold).
+    """
     return [
         (name, f, swing_up(p, force_limit, strategy, K, zone, model=plant, schedule=schedule,
                            t_max=t_max, hold_s=0.0))
@@ -103,9 +162,28 @@ def robustness(
 
 def compare_strategies(
     plant: PlantParams, force_limit: float, K: np.ndarray, zone: Zone | None = None,
-    by: float = 0.10, t_max: float = PUMP_T_MAX_S,
+    by: float = PARAMETER_ERROR, t_max: float = PUMP_T_MAX_S,
 ) -> list[StrategySummary]:
-    """Time to zone, max |s|, E/E0 at hand-off, and success on the 10 perturbed plants."""
+    """Time to zone, max |s|, E/E0 at hand-off, and success on the 10 perturbed plants.
+
+    Parameters
+    ----------
+    plant : PlantParams
+        The nominal plant.
+    force_limit : float
+        Largest force (N).
+    K : array_like
+        State-feedback gain of the linear controller.
+    zone : Zone, optional
+        The hand-off zone (default: default_zone).
+    by, t_max : float
+        The parameter error of the robustness runs, and the longest pump-up (s).
+
+    Returns
+    -------
+    list of StrategySummary
+        One row per strategy, in STRATEGIES order.
+    """
     zone = default_zone(plant, K, force_limit) if zone is None else zone
     sched = optimised_schedule(plant, force_limit, zone)
     rows = []

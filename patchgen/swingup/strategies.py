@@ -69,6 +69,7 @@ class Switch:
 
     @property
     def phase_name(self) -> str:
+        """The phase in words: push, reverse, coast (or hand-off)."""
         return PHASE_NAMES.get(self.phase, "hand-off")
 
 
@@ -77,7 +78,9 @@ class PumpController(Protocol):
 
     switches: list[Switch]
 
-    def force(self, t: float, x: np.ndarray) -> float: ...
+    def force(self, t: float, x: np.ndarray) -> float:
+        """The force (N) at time ``t`` (s) for the state ``x`` (s, theta, s_dot, theta_dot)."""
+        ...
 
 
 class _Pumping:
@@ -157,6 +160,7 @@ class Supervisor(_Pumping):
         self.switches.append(Switch(self.series, phase, float(force), round(float(t), 6), reason))
 
     def force(self, t: float, x: np.ndarray) -> float:
+        """Full force one way or the other, or none, as the phase and its switching rules say."""
         prev = self.prev if self.prev is not None else x
         self.prev = np.array(x, dtype=float)
         if self.phase == 0:
@@ -221,6 +225,7 @@ class EnergyControl(_Pumping):
         return float(x[0] + np.sign(x[2]) * dist)
 
     def force(self, t: float, x: np.ndarray) -> float:
+        """The energy law's force, saturated, or full reverse force when the track guard acts."""
         E = float(pendulum_energy(self.model, x))
         sgn = np.sign(x[3] * np.cos(x[1]))
         if sgn == 0.0:
@@ -248,14 +253,27 @@ class Schedule:
 
     @property
     def times(self) -> np.ndarray:
+        """Switching times (s)."""
         return np.array([s.time_s for s in self.switches])
 
     @property
     def forces(self) -> np.ndarray:
+        """Force from each switching time on (N)."""
         return np.array([s.force_N for s in self.switches])
 
     def force_over(self, t0: float, h: float) -> float:
-        """Mean force over [t0, t0+h]: exact switching times within a fixed step."""
+        """Mean force over [t0, t0+h]: exact switching times within a fixed step.
+
+        Parameters
+        ----------
+        t0, h : float
+            Start and length of the step (s).
+
+        Returns
+        -------
+        float
+            The mean force (N).
+        """
         times, forces = self.times, self.forces
         ends = np.append(times[1:], np.inf)
         overlap = np.clip(np.minimum(ends, t0 + h) - np.maximum(times, t0), 0.0, None)
@@ -272,4 +290,5 @@ class ScheduleReplay:
         self.switches = list(schedule.switches)
 
     def force(self, t: float, x: np.ndarray) -> float:
+        """The schedule's mean force over the step from ``t``; the state is not looked at."""
         return self.schedule.force_over(t, self.h)

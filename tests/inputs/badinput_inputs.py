@@ -114,7 +114,8 @@ def bench_case(name: str, data: dict, field_path: str) -> Case:
 
 OHM, FARAD = Num(1, 1e12), Num(1e-15, 1)
 MACHINE_FIELDS = {
-    "id": str, "name": str, "procedure.pot_setting": str, "imperfections.drift_source": str,
+    "id": str, "name": str, "procedure.pot_setting": str, "procedure.pot_reading": str,
+    "imperfections.drift_source": str,
     "reference_V": Num(0, 1000, open_lo=True), "time_scale_s": Num(1e-6, 1e6),
     "pot_resolution": Num(1e-9, 0.5), "pot_max": Num(0, 100, open_lo=True),
     "pot_count": int, "max_units": int,
@@ -172,6 +173,8 @@ def profile_cases() -> list[Case]:
         "scalar-imperfections": (with_field(GP6, "imperfections", 3), "imperfections"),
         "procedure-missing": (with_field(GP6, "procedure", DELETE), "procedure"),
         "procedure-no-steps": (with_field(GP6, "procedure.checklist", []), "procedure.checklist"),
+        "pot-reading-missing": (with_field(GP6, "procedure.pot_reading", DELETE), "procedure.pot_reading"),
+        "pot-reading-long": (with_field(GP6, "procedure.pot_reading", "d" * 101), "procedure.pot_reading"),
         "step-unknown-placeholder": (_steps("operation", 1, text="Set {pots} now."), "procedure.operation[1].text"),
         "step-bad-brace": (_steps("checklist", 0, text="Patch {machine"), "procedure.checklist[0].text"),
         "step-positional": (_steps("checklist", 2, text="Set {0}."), "procedure.checklist[2].text"),

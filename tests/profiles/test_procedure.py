@@ -12,25 +12,36 @@ from patchgen.profiles.machine import Step, load_machine
 from patchgen.render.patchfiles import patch_files
 
 # terms only one of the two machines has (its manual's or wiki's words)
-GP6_ONLY = ("POT SET", "overload lamps", "HD (hold)", "IC jack")
-THAT_ONLY = ("MODE SELECTOR", "COEFF", "COEFFICIENT SELECTOR", "panel meter", "HALT")
+GP6_ONLY = ("POT SET", "overload lamps", "HD (hold)", "IC jack", "dial")
+THAT_ONLY = ("MODE SELECTOR", "COEFF", "COEFFICIENT SELECTOR", "panel meter", "HALT", "OFF")
 
 
-def _sheet(machine):
+def _files(machine):
     spec = load_spec("thesis-ch5")
     d = design_on(spec, machine, load_bench(spec.bench))
     net = build_patch(d, machine)
-    return net, patch_files(d, machine, net)["patch-sheet.md"]
+    return net, patch_files(d, machine, net)
+
+
+def _sheet(machine):
+    net, files = _files(machine)
+    return net, files["patch-sheet.md"]
 
 
 @pytest.mark.parametrize("name, own, other", [("gp6", GP6_ONLY, THAT_ONLY),
                                               ("the-analog-thing", THAT_ONLY, GP6_ONLY)])
 def test_each_sheet_uses_its_machines_terms(name, own, other):
-    net, md = _sheet(load_machine(name))
+    net, files = _files(load_machine(name))
+    for sheet in ("patch-sheet.md", "patch-sheet.html", "pots.csv"):
+        for term in other:
+            assert term not in files[sheet], (sheet, term)
+    md = files["patch-sheet.md"]
     for term in own:
         assert term in md, term
-    for term in other:
-        assert term not in md, term
+    # the pot a coefficient below the resolution is set on is read on the machine's own instrument
+    reading = load_machine(name).procedure.pot_reading
+    assert f"Settings to the {reading} resolution 0.001." in md
+    assert f"design 5.49e-07 is below the {reading}: set to the minimum" in md
     # the operating steps travel in the netlist, from the same profile
     assert any(own[0] in step for step in net.operation)
     assert not any(term in step for step in net.operation for term in other)

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from patchgen.patch.netlist import read_netlist, wire_list
-from patchgen.profiles.machine import load_machine
+from patchgen.profiles.machine import Step, load_machine
 from patchgen.render.diagram import wiring_svg
 from patchgen.render.sheet import SheetSection, SheetSummary, render_sheet
 
@@ -114,3 +114,19 @@ def test_html_prints_on_at_most_two_pages_that_fit_a4_and_letter(tmp_path):
     assert boxes
     for w, h in boxes:   # within A4 (210 x 297 mm) and Letter (215.9 x 279.4 mm)
         assert w <= 210 * MM + 0.5 and h <= 279.4 * MM + 0.5
+
+
+def test_checklist_and_pot_reading_come_from_the_procedure_given():
+    net = read_netlist(FIXTURE)
+    tat = load_machine("the-analog-thing").procedure
+    steps = [Step(text="Lock the <cart> of the {machine} at ±{reference_V} V."), *tat.checklist[1:]]
+    procedure = tat.model_copy(update={"pot_reading": "vernier", "checklist": steps})
+    html, md = render_sheet(net, SUMMARY, wiring_svg(net), procedure)
+    # the fixture is a GP-6 patch: its name and reference fill the placeholders
+    assert "1. Lock the <cart> of the Comdyna GP-6 at ±10 V." in md
+    assert "<li>Lock the &lt;cart&gt; of the Comdyna GP-6 at ±10 V.</li>" in html
+    assert "Settings to the vernier resolution 0.001." in md and "Settings to the vernier resolution" in html
+    assert "Servo amplifier powered off" not in md and "Settings to the dial" not in md
+    # the sign table is on this sheet, so the checklist carries the sign step with the table, not without
+    assert "check on the panel meter (u_c patched to the u socket)" in md
+    assert "Check each sign with one feedback path at a time (all other coefficients at 0).\n" not in md

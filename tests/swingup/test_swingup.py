@@ -1,5 +1,6 @@
 """Pump-up (thesis chapter 3) on the nonlinear plant, with table B.1 parameters and 15 N."""
 
+import matplotlib
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -8,7 +9,7 @@ from hypothesis import strategies as st
 from patchgen.plant.equations import PlantParams
 from patchgen.swingup.handoff import Zone, default_spread, estimate_zone, lqr_zone, lyapunov_matrix
 from patchgen.swingup.output import output_files, patch_sheet_rows
-from patchgen.swingup.pumping import simulate
+from patchgen.swingup.pumping import HOLD_S, PUMP_T_MAX_S, STEP_S, simulate
 from patchgen.swingup.run import swing_up
 from patchgen.swingup.schedule import optimise_schedule, replay, schedule_from_result
 from patchgen.swingup.strategies import BRAKE, COAST, PUSH, Supervisor, hanging_state, pendulum_energy, upright_energy
@@ -113,6 +114,26 @@ def test_outputs_are_deterministic(supervisory):
     sheet = patch_sheet_rows(supervisory)
     assert sheet[0] == ["Series", "Phase", "Force (N)", "Time (s)"]
     assert sheet[-1][0].startswith("hand-off")
+
+
+def test_plots_leave_matplotlib_settings_alone(supervisory):
+    before = {k: repr(v) for k, v in matplotlib.rcParams.items()}
+    files = output_files(supervisory, svg=True)
+    assert {k: repr(v) for k, v in matplotlib.rcParams.items()} == before
+    # the SVG's own settings applied all the same: glyphs as paths, no date
+    svg = files["swingup.svg"].decode()
+    assert "<path" in svg and "<dc:date>" not in svg and "<text" not in svg
+
+
+def test_a_run_has_the_named_length_and_step(supervisory):
+    assert supervisory.dt == STEP_S == 1e-3
+    assert np.allclose(np.diff(supervisory.t), STEP_S)
+    # the thesis's pump-up takes 5.2 s (Table 3.1): well inside the longest allowed
+    assert supervisory.handoff_time < PUMP_T_MAX_S / 2
+    # the hold after the hand-off runs its full HOLD_S
+    assert supervisory.t[-1] == pytest.approx(supervisory.handoff_time + HOLD_S, abs=STEP_S)
+    missed = swing_up(TABLE_B1, 2.0, "supervisory", K_LQR, Zone.box((1e-3, 1e-4, 1e-3, 1e-3)))
+    assert not missed.reached and missed.t[-1] == pytest.approx(PUMP_T_MAX_S, abs=STEP_S)
 
 
 @settings(max_examples=12, deadline=None)

@@ -29,6 +29,10 @@ EXCURSION_RANGE = (1e-4, 1e4)
 NOISE_MAX = 1e12  # entries of the estimator's W and V
 GAMMA_MAX = 1e6  # entries of the noise input matrix Gamma
 MIN_V_EIGENVALUE = 1e-12  # the measurement noise is inverted: it must be clear of singular
+RHO_LIMIT = 1e12  # LTR factor on W and its cap: the ceiling of the noise entries it scales (NOISE_MAX)
+MAX_UNITS = 16  # machines slaved together: the cap a machine profile's max_units has too
+SYMMETRY_TOL = 1e-12  # relative: a full Q this close to its transpose is symmetric (rounding in the file)
+PSD_TOL = 1e-10  # relative: an eigenvalue of Q above -1e-10 x its largest entry counts as 0
 Entry = Annotated[Real, Field(ge=-NOISE_MAX, le=NOISE_MAX)]
 Weight = Annotated[Real, Field(ge=-WEIGHT_RANGE[1], le=WEIGHT_RANGE[1])]
 
@@ -100,8 +104,8 @@ class EstimatorSpec(InputModel):
     V: list[Entry] | list[list[Entry]] = [1.0, 1.0, 1.0]
     Gamma: Literal["B"] | list[Annotated[Real, Field(ge=-GAMMA_MAX, le=GAMMA_MAX)]] | list[
         list[Annotated[Real, Field(ge=-GAMMA_MAX, le=GAMMA_MAX)]]] = "B"
-    rho: Annotated[Real, Field(gt=0, le=1e12)] | Literal["auto"] = 1.0
-    rho_max: Real = bounded(0, 1e12, open_lo=True, default=1e12)
+    rho: Annotated[Real, Field(gt=0, le=RHO_LIMIT)] | Literal["auto"] = 1.0
+    rho_max: Real = bounded(0, RHO_LIMIT, open_lo=True, default=RHO_LIMIT)
     rolloff_s: Real | None = bounded(1e-4, 1, default=None, description="differentiator roll-off, s "
                                      "(filtered_differentiator: none = chosen from the bench noise)")
     observer_pole: Real | None = bounded(1e-2, 1e4, default=None, description="reduced_observer: error decay "
@@ -111,7 +115,7 @@ class EstimatorSpec(InputModel):
 class PatchSpec(InputModel):
     """Choices for the patch: slaved units and what to do with a coefficient below the dial's resolution."""
 
-    units: Annotated[Int, Field(ge=1, le=16)] | Literal["auto"] = Field(
+    units: Annotated[Int, Field(ge=1, le=MAX_UNITS)] | Literal["auto"] = Field(
         default=1, description="machines slaved together: a number, or \"auto\" for the fewest that fit "
         "(at most the profile's max_units)")
     below_resolution: Literal["round", "minimum", "omit"] = Field(
@@ -250,16 +254,16 @@ def check_spec(spec: DesignSpec) -> None:
                 i, j = tiny[0]
                 raise err(f"weights.Q[{i}][{j}]", f"a weight is 0 or at least {WEIGHT_RANGE[0]:g} in magnitude "
                                                   f"(got {Q[i, j]:g})")
-            if not np.allclose(Q, Q.T, atol=1e-12 * max(1.0, np.abs(Q).max())):
+            if not np.allclose(Q, Q.T, atol=SYMMETRY_TOL * max(1.0, np.abs(Q).max())):
                 raise err("weights.Q", "must be symmetric")
-            if np.linalg.eigvalsh(Q).min() < -1e-10 * max(1.0, np.abs(Q).max()):
+            if np.linalg.eigvalsh(Q).min() < -PSD_TOL * max(1.0, np.abs(Q).max()):
                 raise err("weights.Q", "must be positive semi-definite")
         _in_range(w.R, "weights.R", WEIGHT_RANGE, "a control weight", err)
     a = spec.actuator
     if a.model != "gain" and a.tau <= 0:
         raise err("actuator.tau", f"a {a.model} actuator needs a positive time constant (at least {MIN_LAG_S:g} s)")
     if spec.estimator.kind == "kalman":
-        _check_kalman(spec, 4 + (1 if a.model != "gain" else 0))
+        _check_kalman(spec, len(PLANT_STATES) + (1 if a.model != "gain" else 0))
 
 
 def _check_kalman(spec: DesignSpec, n_est: int) -> None:
@@ -285,7 +289,7 @@ def _check_kalman(spec: DesignSpec, n_est: int) -> None:
         V = matrix(e.V, "estimator.V", err)
     else:
         V = np.diag(np.array(e.V, dtype=float)) if e.V else np.zeros((0, 0))
-    if V.shape != (3, 3):
+    if V.shape != (len(MEASURED), len(MEASURED)):
         raise err("estimator.V", f"must be 3 values or 3x3 for the measured {', '.join(MEASURED)}")
     if np.linalg.eigvalsh((V + V.T) / 2).min() < MIN_V_EIGENVALUE:
         raise err("estimator.V", f"must be positive definite (smallest eigenvalue at least {MIN_V_EIGENVALUE:g})")

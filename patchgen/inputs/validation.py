@@ -17,6 +17,7 @@ from patchgen.inputs.inputfile import decode_text, read_bytes
 from patchgen.inputs.resources import resolve
 
 M = TypeVar("M", bound=BaseModel)
+SHOWN_MAX = 40  # characters of an offending value an error line quotes: the line stays one line
 
 # the parts of a pydantic location that name a union member or a validator, not a field
 _TAG = re.compile(r"^[a-z][a-z-]*\[.*\]$|^(float|int|str|bool|list|dict|none|constrained-float|constrained-int"
@@ -61,7 +62,7 @@ def _shown(v: Any) -> str:
     if isinstance(v, float) and not math.isfinite(v):
         return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
     text = repr(v)
-    return text if len(text) <= 40 else text[:37] + "..."
+    return text if len(text) <= SHOWN_MAX else text[:SHOWN_MAX - 3] + "..."
 
 
 _BOUNDS = {"greater_than": ("gt", "must be greater than"), "greater_than_equal": ("ge", "must be at least"),

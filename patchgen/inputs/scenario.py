@@ -151,8 +151,23 @@ class Scenario(InputModel):
 
 
 def load_scenario(path: str | Path) -> Scenario:
-    """Read and check a scenario TOML file, or a shipped scenario by name (``hold-120s``); its name
-    defaults to the file's stem."""
+    """Read and check a scenario.
+
+    Parameters
+    ----------
+    path : str or Path
+        A scenario file, or a shipped scenario by name (``hold-120s``).
+
+    Returns
+    -------
+    Scenario
+        The checked scenario; its name defaults to the file's stem.
+
+    Raises
+    ------
+    InputError
+        Any problem with the file or a field (a disturbance after the end among them).
+    """
     sc = validate(Scenario, read_toml(resolve("scenario", path)), str(path))
     sc = sc if sc.name else sc.model_copy(update={"name": Path(str(path)).stem})
     sc._path = str(path)
@@ -164,8 +179,23 @@ def load_scenario(path: str | Path) -> Scenario:
 
 
 def check_on_track(sc: Scenario, track_m: float, spec_path: str) -> None:
-    """The initial cart position must be inside the track between the limit switches of the spec's
-    plant (d, from ``spec_path``), or the run would end before it starts."""
+    """The initial cart position must be inside the track between the limit switches, or the run
+    would end before it starts.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    track_m : float
+        The track length d of the spec's plant (m); the switches sit at +/- d/2.
+    spec_path : str
+        The spec that gave d, named in the error.
+
+    Raises
+    ------
+    InputError
+        Naming the scenario's ``initial.s``.
+    """
     if abs(sc.initial.s) >= track_m / 2:
         raise InputError(sc.path, "initial.s", f"{sc.initial.s:g} m is outside the track: the limit switches of "
                          f"{spec_path} are at +/-{track_m / 2:g} m (plant.d = {track_m:g} m)")

@@ -143,6 +143,7 @@ class DesignSpec(InputModel):
 
     @property
     def path(self) -> str:
+        """The file the spec was read from (or a label for a spec built in code)."""
         return self._path
 
     def states(self) -> list[str]:
@@ -157,15 +158,32 @@ class DesignSpec(InputModel):
         return out
 
     def error(self, field: str, message: str) -> InputError:
+        """An InputError naming this spec's file and ``field`` (to raise; a design stage's refusal)."""
         return InputError(self._path, field, message)
 
     def theta_dot_scale(self) -> float:
+        """V per rad/s of the voltage carrying theta_dot: the spec's, else the theta sensor's."""
         return self.sensors.theta_dot if self.sensors.theta_dot is not None else self.sensors.theta
 
 
 def load_spec(path: str | Path) -> DesignSpec:
-    """Read and fully check a design spec (a file, or a shipped design by name such as
-    ``bench-recommended``); every problem is an InputError naming file and field."""
+    """Read and fully check a design spec.
+
+    Parameters
+    ----------
+    path : str or Path
+        A spec file, or a shipped design by name (``bench-recommended``).
+
+    Returns
+    -------
+    DesignSpec
+        The checked spec; its ``path`` is ``path`` as given.
+
+    Raises
+    ------
+    InputError
+        Any problem with the file or a field, naming both.
+    """
     spec = validate(DesignSpec, read_toml(resolve("design", path)), str(path))
     spec._path = str(path)
     check_spec(spec)
@@ -173,7 +191,19 @@ def load_spec(path: str | Path) -> DesignSpec:
 
 
 def q_matrix(spec: DesignSpec) -> np.ndarray:
-    """The state weight Q over the spec's states (Bryson's rule when the spec asks for it)."""
+    """The state weight Q over the spec's states (Bryson's rule when the spec asks for it).
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        A checked spec.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        Q in the order of ``spec.states()``: diagonal from named weights or 1/excursion^2
+        (eq. 4.9), or the spec's full matrix.
+    """
     states = spec.states()
     n = len(states)
     w = spec.weights
@@ -193,7 +223,7 @@ def q_matrix(spec: DesignSpec) -> np.ndarray:
 
 
 def r_matrix(spec: DesignSpec) -> np.ndarray:
-    """The control weight R as a 1 x 1 matrix."""
+    """The control weight R as a 1 x 1 matrix (1/u_max^2 under Bryson's rule, eq. 4.10)."""
     w = spec.weights
     if w.bryson is not None:
         return np.array([[1.0 / w.bryson["u"] ** 2]])
@@ -201,7 +231,22 @@ def r_matrix(spec: DesignSpec) -> np.ndarray:
 
 
 def matrix(rows: list[list[float]], field: str, err) -> np.ndarray:
-    """A list of rows as a 2-D array; an empty or ragged matrix is named at the row at fault."""
+    """A list of rows as a 2-D array; an empty or ragged matrix is named at the row at fault.
+
+    Parameters
+    ----------
+    rows : list of list of float
+        The matrix as the TOML file gives it.
+    field : str
+        Its field path, for the error.
+    err : callable
+        ``err(field, message)`` builds the error to raise (e.g. ``DesignSpec.error``).
+
+    Returns
+    -------
+    ndarray
+        The matrix as floats.
+    """
     if not rows or not rows[0]:
         raise err(field, "an empty matrix")
     for i, row in enumerate(rows):
@@ -218,7 +263,18 @@ def _in_range(value: float, field: str, bounds: tuple[float, float], what: str, 
 
 
 def check_spec(spec: DesignSpec) -> None:
-    """Checks that need more than one field: weights against the states, estimator shapes."""
+    """Checks that need more than one field: weights against the states, estimator shapes.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        A spec whose fields are each valid on their own.
+
+    Raises
+    ------
+    InputError
+        The first problem, naming the field to fix.
+    """
     states = spec.states()
     w = spec.weights
     err = spec.error

@@ -4,7 +4,17 @@ from __future__ import annotations
 
 
 class InputError(Exception):
-    """Bad input from the user (spec, scenario, option). The CLI prints it as one line, exit 2."""
+    """Bad input from the user (spec, scenario, option). The CLI prints it as one line, exit 2.
+
+    Parameters
+    ----------
+    source : str
+        The file (or option) at fault.
+    field : str
+        The field path inside it (``weights.Q.theta``), or "" for the file as a whole.
+    message : str
+        What is wrong, in words a user can act on.
+    """
 
     exit_status = 2
 
@@ -19,6 +29,7 @@ class InputError(Exception):
         return (type(self), (self.source, self.field, self.message))
 
     def line(self) -> str:
+        """``source: field: message``, the one line the CLI prints."""
         where = f"{self.source}: {self.field}" if self.field else self.source
         return f"{where}: {self.message}"
 

@@ -40,7 +40,21 @@ class InputModel(BaseModel):
 
 def bounded(lo: float | None = None, hi: float | None = None, *, open_lo: bool = False,
             default: Any = ..., description: str | None = None, **kw: Any) -> Any:
-    """A Field with an inclusive range [lo, hi] (``open_lo``: lo itself excluded)."""
+    """A pydantic Field with an inclusive range [lo, hi].
+
+    Parameters
+    ----------
+    lo, hi : float, optional
+        The limits; None leaves that side open.
+    open_lo : bool
+        Exclude ``lo`` itself (a duration that must be positive).
+    default : object
+        The default; none (required) unless given.
+    description : str, optional
+        Units and meaning, shown in the JSON schema.
+    **kw
+        Passed on to :func:`pydantic.Field`.
+    """
     limits = {"gt" if open_lo else "ge": lo} if lo is not None else {}
     if hi is not None:
         limits["le"] = hi

@@ -44,9 +44,25 @@ def _os_problem(exc: OSError) -> str:
 def read_bytes(path: str | Path | Traversable, named_by: tuple[str, str, str] | None = None) -> bytes:
     """The bytes of a regular file of at most MAX_INPUT_BYTES (a shipped resource is read as is).
 
-    A path that cannot be used (missing, a directory, a FIFO, unreadable) is named against
-    ``named_by`` = (file, field, what) when the path came from another file's field, e.g. a spec's
-    machine profile: that field is what to fix. What is read (too large) names the path itself.
+    Parameters
+    ----------
+    path : str, Path or Traversable
+        The file.
+    named_by : tuple of (str, str, str), optional
+        (file, field, what) when the path came from another file's field, e.g. a spec's machine
+        profile: a path that cannot be used (missing, a directory, a FIFO, unreadable) is then
+        named against that field, which is what to fix. What is read (too large) names the path
+        itself.
+
+    Returns
+    -------
+    bytes
+        The file's contents.
+
+    Raises
+    ------
+    InputError
+        Naming what the path is when it is not a readable regular file of a spec's size.
     """
     if isinstance(path, Traversable) and not isinstance(path, Path):
         return path.read_bytes()

@@ -53,8 +53,25 @@ def shipped_file(kind: str, name: str) -> Traversable:
 def resolve(kind: str, name_or_path: str | Path, source: str = "", field: str = "") -> Path | Traversable:
     """A user's file by path, or a shipped one by stem (when no file of that name exists).
 
-    The error for a name that is neither names ``source`` and ``field`` when given (a profile
-    named in a spec), else the name itself.
+    Parameters
+    ----------
+    kind : str
+        A key of :data:`FOLDERS` (``"design"``, ``"scenario"``, ``"machine"``, ``"bench"``).
+    name_or_path : str or Path
+        What the user gave. Anything that exists, or looks like a path (a suffix, a slash), is a
+        path; otherwise a shipped stem.
+    source, field : str
+        The file and field that named it, for the error (a profile named in a spec).
+
+    Returns
+    -------
+    Path or Traversable
+        The path as given, or the shipped resource.
+
+    Raises
+    ------
+    InputError
+        Neither a file nor a shipped stem; the known stems are listed.
     """
     text = str(name_or_path)
     path = Path(text)

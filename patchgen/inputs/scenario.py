@@ -20,17 +20,27 @@ from patchgen.inputs.validation import read_toml, validate
 
 MAX_DURATION_S = 1e5  # about a day: longer than any bench experiment
 LEVEL_MAX_V = 100.0  # noise levels (V rms) and drift rates (V/s): far beyond any machine's rails
+MAX_DISTANCE_M = 100.0  # cart position and step size: a hundred times a bench track (d = 1.09 m)
+MAX_SPEED_M_S = 100.0  # cart speed: far beyond any cart a bench force can move
+MAX_RATE_RAD_S = 1000.0  # pendulum rate: far beyond any swing of a bench pendulum
+MAX_FORCE_N = 1e4  # a push: far beyond the 15 N the bench's actuator gives
+DT_RANGE_S = (1e-6, 0.05)  # the engine's step: at most a quarter of the bench actuator's 0.2 s lag
+RECORD_DT_RANGE_S = (1e-6, 1e3)  # history sample interval
+RECORD_DT_S = 0.01  # default history sample interval: 100 samples a second, enough for the plots
+FALL_ANGLE_DEG = 30.0  # default: three times the 10 deg the standard scenarios start from
+MAX_DISTURBANCES = 1000  # disturbances in one scenario: far more than any experiment has
+SEED_LIMIT = 2**63  # a seed is a non-negative signed 64-bit integer, as the simulator checks too
 
 
 class InitialState(InputModel):
     """Plant state at t = 0 (SI units; the angle in rad or in degrees, not both): the angle within
     +/-180 deg, the cart within 100 m (and, against a spec, inside its track)."""
 
-    s: magnitude(100.0) = 0.0
+    s: magnitude(MAX_DISTANCE_M) = 0.0
     theta: magnitude(math.pi) | None = None
     theta_deg: magnitude(180.0) | None = Field(default=None, validate_default=True)
-    s_dot: magnitude(100.0) = 0.0
-    theta_dot: magnitude(1000.0) = 0.0
+    s_dot: magnitude(MAX_SPEED_M_S) = 0.0
+    theta_dot: magnitude(MAX_RATE_RAD_S) = 0.0
 
     @field_validator("theta_deg", mode="after")
     @classmethod
@@ -60,8 +70,8 @@ class Disturbance(InputModel):
     time_s: Real = bounded(0, MAX_DURATION_S)
     at: Literal["pendulum_tip", "cart"] | None = Field(default=None, validate_default=True)
     duration_s: Real | None = bounded(0, MAX_DURATION_S, open_lo=True, default=None, validate_default=True)
-    force_N: magnitude(1e4) | None = Field(default=None, validate_default=True)
-    size_m: magnitude(100.0) | None = Field(default=None, validate_default=True)
+    force_N: magnitude(MAX_FORCE_N) | None = Field(default=None, validate_default=True)
+    size_m: magnitude(MAX_DISTANCE_M) | None = Field(default=None, validate_default=True)
 
     @field_validator("at", "duration_s", "force_N", "size_m", mode="after")
     @classmethod
@@ -102,12 +112,12 @@ class Scenario(InputModel):
     name: str = ""
     description: str = ""
     duration_s: Real = bounded(0, MAX_DURATION_S, open_lo=True)
-    dt_s: Real | None = bounded(1e-6, 0.05, default=None)
-    record_dt_s: Real = bounded(1e-6, 1e3, default=0.01)
-    seed: Int = Field(default=0, ge=0, lt=2**63)
-    fall_angle_deg: Real = bounded(0, 180, open_lo=True, default=30.0)
+    dt_s: Real | None = bounded(*DT_RANGE_S, default=None)
+    record_dt_s: Real = bounded(*RECORD_DT_RANGE_S, default=RECORD_DT_S)
+    seed: Int = Field(default=0, ge=0, lt=SEED_LIMIT)
+    fall_angle_deg: Real = bounded(0, 180, open_lo=True, default=FALL_ANGLE_DEG)
     initial: InitialState = InitialState()
-    disturbances: list[Disturbance] = Field(default_factory=list, max_length=1000)
+    disturbances: list[Disturbance] = Field(default_factory=list, max_length=MAX_DISTURBANCES)
     noise: NoiseLevels = NoiseLevels(mode="profile")
     drift: Literal["profile", "off"] | Level = "profile"
 
@@ -141,8 +151,23 @@ class Scenario(InputModel):
 
 
 def load_scenario(path: str | Path) -> Scenario:
-    """Read and check a scenario TOML file, or a shipped scenario by name (``hold-120s``); its name
-    defaults to the file's stem."""
+    """Read and check a scenario.
+
+    Parameters
+    ----------
+    path : str or Path
+        A scenario file, or a shipped scenario by name (``hold-120s``).
+
+    Returns
+    -------
+    Scenario
+        The checked scenario; its name defaults to the file's stem.
+
+    Raises
+    ------
+    InputError
+        Any problem with the file or a field (a disturbance after the end among them).
+    """
     sc = validate(Scenario, read_toml(resolve("scenario", path)), str(path))
     sc = sc if sc.name else sc.model_copy(update={"name": Path(str(path)).stem})
     sc._path = str(path)
@@ -154,8 +179,23 @@ def load_scenario(path: str | Path) -> Scenario:
 
 
 def check_on_track(sc: Scenario, track_m: float, spec_path: str) -> None:
-    """The initial cart position must be inside the track between the limit switches of the spec's
-    plant (d, from ``spec_path``), or the run would end before it starts."""
+    """The initial cart position must be inside the track between the limit switches, or the run
+    would end before it starts.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    track_m : float
+        The track length d of the spec's plant (m); the switches sit at +/- d/2.
+    spec_path : str
+        The spec that gave d, named in the error.
+
+    Raises
+    ------
+    InputError
+        Naming the scenario's ``initial.s``.
+    """
     if abs(sc.initial.s) >= track_m / 2:
         raise InputError(sc.path, "initial.s", f"{sc.initial.s:g} m is outside the track: the limit switches of "
                          f"{spec_path} are at +/-{track_m / 2:g} m (plant.d = {track_m:g} m)")

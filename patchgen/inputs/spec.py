@@ -29,6 +29,10 @@ EXCURSION_RANGE = (1e-4, 1e4)
 NOISE_MAX = 1e12  # entries of the estimator's W and V
 GAMMA_MAX = 1e6  # entries of the noise input matrix Gamma
 MIN_V_EIGENVALUE = 1e-12  # the measurement noise is inverted: it must be clear of singular
+RHO_LIMIT = 1e12  # LTR factor on W and its cap: the ceiling of the noise entries it scales (NOISE_MAX)
+MAX_UNITS = 16  # machines slaved together: the cap a machine profile's max_units has too
+SYMMETRY_TOL = 1e-12  # relative: a full Q this close to its transpose is symmetric (rounding in the file)
+PSD_TOL = 1e-10  # relative: an eigenvalue of Q above -1e-10 x its largest entry counts as 0
 Entry = Annotated[Real, Field(ge=-NOISE_MAX, le=NOISE_MAX)]
 Weight = Annotated[Real, Field(ge=-WEIGHT_RANGE[1], le=WEIGHT_RANGE[1])]
 
@@ -100,8 +104,8 @@ class EstimatorSpec(InputModel):
     V: list[Entry] | list[list[Entry]] = [1.0, 1.0, 1.0]
     Gamma: Literal["B"] | list[Annotated[Real, Field(ge=-GAMMA_MAX, le=GAMMA_MAX)]] | list[
         list[Annotated[Real, Field(ge=-GAMMA_MAX, le=GAMMA_MAX)]]] = "B"
-    rho: Annotated[Real, Field(gt=0, le=1e12)] | Literal["auto"] = 1.0
-    rho_max: Real = bounded(0, 1e12, open_lo=True, default=1e12)
+    rho: Annotated[Real, Field(gt=0, le=RHO_LIMIT)] | Literal["auto"] = 1.0
+    rho_max: Real = bounded(0, RHO_LIMIT, open_lo=True, default=RHO_LIMIT)
     rolloff_s: Real | None = bounded(1e-4, 1, default=None, description="differentiator roll-off, s "
                                      "(filtered_differentiator: none = chosen from the bench noise)")
     observer_pole: Real | None = bounded(1e-2, 1e4, default=None, description="reduced_observer: error decay "
@@ -111,7 +115,7 @@ class EstimatorSpec(InputModel):
 class PatchSpec(InputModel):
     """Choices for the patch: slaved units and what to do with a coefficient below the dial's resolution."""
 
-    units: Annotated[Int, Field(ge=1, le=16)] | Literal["auto"] = Field(
+    units: Annotated[Int, Field(ge=1, le=MAX_UNITS)] | Literal["auto"] = Field(
         default=1, description="machines slaved together: a number, or \"auto\" for the fewest that fit "
         "(at most the profile's max_units)")
     below_resolution: Literal["round", "minimum", "omit"] = Field(
@@ -139,6 +143,7 @@ class DesignSpec(InputModel):
 
     @property
     def path(self) -> str:
+        """The file the spec was read from (or a label for a spec built in code)."""
         return self._path
 
     def states(self) -> list[str]:
@@ -153,15 +158,32 @@ class DesignSpec(InputModel):
         return out
 
     def error(self, field: str, message: str) -> InputError:
+        """An InputError naming this spec's file and ``field`` (to raise; a design stage's refusal)."""
         return InputError(self._path, field, message)
 
     def theta_dot_scale(self) -> float:
+        """V per rad/s of the voltage carrying theta_dot: the spec's, else the theta sensor's."""
         return self.sensors.theta_dot if self.sensors.theta_dot is not None else self.sensors.theta
 
 
 def load_spec(path: str | Path) -> DesignSpec:
-    """Read and fully check a design spec (a file, or a shipped design by name such as
-    ``bench-recommended``); every problem is an InputError naming file and field."""
+    """Read and fully check a design spec.
+
+    Parameters
+    ----------
+    path : str or Path
+        A spec file, or a shipped design by name (``bench-recommended``).
+
+    Returns
+    -------
+    DesignSpec
+        The checked spec; its ``path`` is ``path`` as given.
+
+    Raises
+    ------
+    InputError
+        Any problem with the file or a field, naming both.
+    """
     spec = validate(DesignSpec, read_toml(resolve("design", path)), str(path))
     spec._path = str(path)
     check_spec(spec)
@@ -169,7 +191,19 @@ def load_spec(path: str | Path) -> DesignSpec:
 
 
 def q_matrix(spec: DesignSpec) -> np.ndarray:
-    """The state weight Q over the spec's states (Bryson's rule when the spec asks for it)."""
+    """The state weight Q over the spec's states (Bryson's rule when the spec asks for it).
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        A checked spec.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        Q in the order of ``spec.states()``: diagonal from named weights or 1/excursion^2
+        (eq. 4.9), or the spec's full matrix.
+    """
     states = spec.states()
     n = len(states)
     w = spec.weights
@@ -189,7 +223,7 @@ def q_matrix(spec: DesignSpec) -> np.ndarray:
 
 
 def r_matrix(spec: DesignSpec) -> np.ndarray:
-    """The control weight R as a 1 x 1 matrix."""
+    """The control weight R as a 1 x 1 matrix (1/u_max^2 under Bryson's rule, eq. 4.10)."""
     w = spec.weights
     if w.bryson is not None:
         return np.array([[1.0 / w.bryson["u"] ** 2]])
@@ -197,7 +231,22 @@ def r_matrix(spec: DesignSpec) -> np.ndarray:
 
 
 def matrix(rows: list[list[float]], field: str, err) -> np.ndarray:
-    """A list of rows as a 2-D array; an empty or ragged matrix is named at the row at fault."""
+    """A list of rows as a 2-D array; an empty or ragged matrix is named at the row at fault.
+
+    Parameters
+    ----------
+    rows : list of list of float
+        The matrix as the TOML file gives it.
+    field : str
+        Its field path, for the error.
+    err : callable
+        ``err(field, message)`` builds the error to raise (e.g. ``DesignSpec.error``).
+
+    Returns
+    -------
+    ndarray
+        The matrix as floats.
+    """
     if not rows or not rows[0]:
         raise err(field, "an empty matrix")
     for i, row in enumerate(rows):
@@ -214,7 +263,18 @@ def _in_range(value: float, field: str, bounds: tuple[float, float], what: str, 
 
 
 def check_spec(spec: DesignSpec) -> None:
-    """Checks that need more than one field: weights against the states, estimator shapes."""
+    """Checks that need more than one field: weights against the states, estimator shapes.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        A spec whose fields are each valid on their own.
+
+    Raises
+    ------
+    InputError
+        The first problem, naming the field to fix.
+    """
     states = spec.states()
     w = spec.weights
     err = spec.error
@@ -250,16 +310,16 @@ def check_spec(spec: DesignSpec) -> None:
                 i, j = tiny[0]
                 raise err(f"weights.Q[{i}][{j}]", f"a weight is 0 or at least {WEIGHT_RANGE[0]:g} in magnitude "
                                                   f"(got {Q[i, j]:g})")
-            if not np.allclose(Q, Q.T, atol=1e-12 * max(1.0, np.abs(Q).max())):
+            if not np.allclose(Q, Q.T, atol=SYMMETRY_TOL * max(1.0, np.abs(Q).max())):
                 raise err("weights.Q", "must be symmetric")
-            if np.linalg.eigvalsh(Q).min() < -1e-10 * max(1.0, np.abs(Q).max()):
+            if np.linalg.eigvalsh(Q).min() < -PSD_TOL * max(1.0, np.abs(Q).max()):
                 raise err("weights.Q", "must be positive semi-definite")
         _in_range(w.R, "weights.R", WEIGHT_RANGE, "a control weight", err)
     a = spec.actuator
     if a.model != "gain" and a.tau <= 0:
         raise err("actuator.tau", f"a {a.model} actuator needs a positive time constant (at least {MIN_LAG_S:g} s)")
     if spec.estimator.kind == "kalman":
-        _check_kalman(spec, 4 + (1 if a.model != "gain" else 0))
+        _check_kalman(spec, len(PLANT_STATES) + (1 if a.model != "gain" else 0))
 
 
 def _check_kalman(spec: DesignSpec, n_est: int) -> None:
@@ -285,7 +345,7 @@ def _check_kalman(spec: DesignSpec, n_est: int) -> None:
         V = matrix(e.V, "estimator.V", err)
     else:
         V = np.diag(np.array(e.V, dtype=float)) if e.V else np.zeros((0, 0))
-    if V.shape != (3, 3):
+    if V.shape != (len(MEASURED), len(MEASURED)):
         raise err("estimator.V", f"must be 3 values or 3x3 for the measured {', '.join(MEASURED)}")
     if np.linalg.eigvalsh((V + V.T) / 2).min() < MIN_V_EIGENVALUE:
         raise err("estimator.V", f"must be positive definite (smallest eigenvalue at least {MIN_V_EIGENVALUE:g})")

@@ -17,6 +17,7 @@ from patchgen.inputs.inputfile import decode_text, read_bytes
 from patchgen.inputs.resources import resolve
 
 M = TypeVar("M", bound=BaseModel)
+SHOWN_MAX = 40  # characters of an offending value an error line quotes: the line stays one line
 
 # the parts of a pydantic location that name a union member or a validator, not a field
 _TAG = re.compile(r"^[a-z][a-z-]*\[.*\]$|^(float|int|str|bool|list|dict|none|constrained-float|constrained-int"
@@ -24,7 +25,23 @@ _TAG = re.compile(r"^[a-z][a-z-]*\[.*\]$|^(float|int|str|bool|list|dict|none|con
 
 
 def read_toml(path: str | Path | Traversable) -> dict[str, Any]:
-    """Parse a TOML file (a path or a shipped resource); any problem with the file is an InputError."""
+    """Parse a TOML file.
+
+    Parameters
+    ----------
+    path : str, Path or Traversable
+        A user's file or a shipped resource.
+
+    Returns
+    -------
+    dict
+        The TOML document.
+
+    Raises
+    ------
+    InputError
+        Any problem with the file: unreadable, not UTF-8, not valid TOML.
+    """
     return parse_toml(read_bytes(path), str(path))
 
 
@@ -61,7 +78,7 @@ def _shown(v: Any) -> str:
     if isinstance(v, float) and not math.isfinite(v):
         return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
     text = repr(v)
-    return text if len(text) <= 40 else text[:37] + "..."
+    return text if len(text) <= SHOWN_MAX else text[:SHOWN_MAX - 3] + "..."
 
 
 _BOUNDS = {"greater_than": ("gt", "must be greater than"), "greater_than_equal": ("ge", "must be at least"),
@@ -109,7 +126,29 @@ def _chosen(errors: list[dict]) -> tuple[tuple, str, Any]:
 
 
 def validate(model: type[M], data: Any, source: str, prefix: str = "") -> M:
-    """Validate data against a pydantic model, raising the first problem as one line."""
+    """Validate data against a pydantic model, raising the first problem as one line.
+
+    Parameters
+    ----------
+    model : type
+        The pydantic model (an InputModel).
+    data : object
+        The parsed input.
+    source : str
+        The file it came from, named in the error.
+    prefix : str
+        A field path the model sits under, put before the field in the error ("" at the top).
+
+    Returns
+    -------
+    model
+        The validated instance.
+
+    Raises
+    ------
+    InputError
+        The first problem: its field path, what is wrong, and the offending value.
+    """
     try:
         return model.model_validate(data)
     except ValidationError as exc:
@@ -126,9 +165,29 @@ def validate(model: type[M], data: Any, source: str, prefix: str = "") -> M:
 
 def load_profile(model: type[M], name_or_path: str, kind: str, source: str, field: str,
                  check: Callable[[M, str], None] | None = None) -> M:
-    """A shipped profile by id (``uw-1991``) or any profile file by path. A path that cannot be
-    read is named against the field that gave it; a bad profile names the profile's own field
-    (``check`` adds the checks that need more than one field)."""
+    """A shipped profile by id (``uw-1991``) or any profile file by path.
+
+    A path that cannot be read is named against the field that gave it; a bad profile names the
+    profile's own field.
+
+    Parameters
+    ----------
+    model : type
+        The profile's model.
+    name_or_path : str
+        A shipped profile's id or a file's path.
+    kind : str
+        ``"machine"`` or ``"bench"`` (see :data:`patchgen.inputs.resources.FOLDERS`).
+    source, field : str
+        The file and field that named the profile ("" when a user named it directly).
+    check : callable, optional
+        ``check(profile, label)``: the checks that need more than one field.
+
+    Returns
+    -------
+    model
+        The checked profile.
+    """
     path = resolve(kind, name_or_path, source, field)
     data = read_bytes(path, named_by=(source, field, f"{kind} profile") if source else None)
     label = str(path) if isinstance(path, Path) else str(name_or_path)

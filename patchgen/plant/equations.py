@@ -15,7 +15,23 @@ PLANT_STATES = ("s", "theta", "s_dot", "theta_dot")
 
 @dataclass(frozen=True)
 class PlantParams:
-    """Table B.1: masses (kg), effective length (m), g (m/s^2), frictions, track length d (m)."""
+    """The plant's physical parameters (thesis table B.1), SI units.
+
+    Attributes
+    ----------
+    M, m : float
+        Cart and pendulum masses (kg).
+    l : float
+        Effective pendulum length (m).
+    g : float
+        Gravity (m/s^2).
+    b_VF : float
+        Cart friction (N s/m).
+    c : float
+        Pendulum pivot friction (N m s).
+    d : float
+        Track length between the limit switches (m).
+    """
 
     M: float
     m: float
@@ -26,12 +42,36 @@ class PlantParams:
     d: float
 
     def scaled(self, **factors: float) -> PlantParams:
-        """A copy with named parameters multiplied by the given factors (for sweeps)."""
+        """A copy with named parameters multiplied by the given factors (for sweeps).
+
+        Parameters
+        ----------
+        **factors : float
+            Parameter name -> factor, e.g. ``M=1.1`` for a cart 10 % heavier.
+
+        Returns
+        -------
+        PlantParams
+            The perturbed plant; this one is unchanged.
+        """
         return replace(self, **{k: getattr(self, k) * f for k, f in factors.items()})
 
 
 def linear_matrices(p: PlantParams) -> tuple[np.ndarray, np.ndarray]:
-    """A (4x4) and B (4x1) of eq. 2.28, linearised about upright."""
+    """The plant linearised about upright (eq. 2.28): x' = A x + B F_U.
+
+    Parameters
+    ----------
+    p : PlantParams
+        The plant.
+
+    Returns
+    -------
+    A : ndarray, shape (4, 4)
+        State matrix over s, theta, s_dot, theta_dot.
+    B : ndarray, shape (4, 1)
+        Input matrix for the cart force F_U (N).
+    """
     M, m, l, g, b, c = p.M, p.m, p.l, p.g, p.b_VF, p.c
     A = np.array(
         [
@@ -46,10 +86,24 @@ def linear_matrices(p: PlantParams) -> tuple[np.ndarray, np.ndarray]:
 
 
 def nonlinear_rhs(p: PlantParams, x: np.ndarray, force: float | np.ndarray) -> np.ndarray:
-    """dx/dt of eq. 2.16-2.19 for state x = [s, theta, s_dot, theta_dot] (x may be 4xN).
+    """dx/dt of the nonlinear plant (eq. 2.16-2.19).
 
     Eq. 2.18-2.19 print x_2^2 in the centripetal term; the derivation (eq. 2.14) has
     x_4^2 (theta_dot squared), which is what is used here.
+
+    Parameters
+    ----------
+    p : PlantParams
+        The plant.
+    x : ndarray, shape (4,) or (4, N)
+        State [s, theta, s_dot, theta_dot] (SI), or N states side by side.
+    force : float or ndarray, shape (N,)
+        Force on the cart (N).
+
+    Returns
+    -------
+    ndarray
+        dx/dt, shaped like ``x``.
     """
     M, m, l, g, b, c = p.M, p.m, p.l, p.g, p.b_VF, p.c
     _, th, sd, thd = x[0], x[1], x[2], x[3]

@@ -13,7 +13,24 @@ from patchgen.plant.equations import PlantParams, nonlinear_rhs
 
 
 def rk4_step(plant: PlantParams, x: np.ndarray, force: float | np.ndarray, h: float) -> np.ndarray:
-    """One RK4 step of eq. 2.16-2.19 with the force constant over the step (x is 4 or 4xN)."""
+    """One RK4 step of eq. 2.16-2.19 with the force held constant over the step.
+
+    Parameters
+    ----------
+    plant : PlantParams
+        The plant.
+    x : ndarray, shape (4,) or (4, N)
+        State [s, theta, s_dot, theta_dot] (SI), or N states advanced together.
+    force : float or ndarray, shape (N,)
+        Force on the cart over the step (N).
+    h : float
+        Step (s).
+
+    Returns
+    -------
+    ndarray
+        The state after the step, shaped like ``x``.
+    """
     k1 = nonlinear_rhs(plant, x, force)
     k2 = nonlinear_rhs(plant, x + 0.5 * h * k1, force)
     k3 = nonlinear_rhs(plant, x + 0.5 * h * k2, force)

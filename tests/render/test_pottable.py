@@ -1,0 +1,74 @@
+"""The pot table on its own: CSV read back, each row against the pot it describes, the terminal table."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import pytest
+from rich.console import Console
+
+from patchgen.design.lqg import design_on
+from patchgen.inputs.spec import load_spec
+from patchgen.patch.build import build_patch
+from patchgen.profiles.bench import load_bench
+from patchgen.profiles.machine import load_machine
+from patchgen.render.pottable import COLUMNS, pot_rows, pot_table, pots_csv
+
+GP6 = load_machine("gp6")
+
+
+@pytest.fixture(scope="module")
+def net():
+    spec = load_spec("bench-recommended")
+    return build_patch(design_on(spec, GP6, load_bench(spec.bench)), GP6)
+
+
+def _with_zero_coefficient(net):
+    """The netlist with its first pot wired for a coefficient of 0 (an error with no percentage)."""
+    pots = [net.pots[0].model_copy(update={"coefficient": 0.0}), *net.pots[1:]]
+    return net.model_copy(update={"pots": pots})
+
+
+def test_csv_reads_back_to_the_rows(net):
+    text = pots_csv(net)
+    reader = csv.DictReader(io.StringIO(text))
+    assert tuple(reader.fieldnames) == COLUMNS
+    back = list(reader)
+    assert back == [{k: str(v) for k, v in row.items()} for row in pot_rows(net)]
+    assert [r["pot"] for r in back] == [p.id for p in net.pots] == ["P1", "P2", "P3", "P4", "P5"]
+    assert text.endswith("\n") and "\r" not in text
+
+
+def test_each_row_is_its_pot(net):
+    for p, row in zip(net.pots, pot_rows(net), strict=True):
+        setting, weight = float(row["setting"]), int(row["weight"])
+        assert setting == pytest.approx(p.setting, abs=5e-4)  # three decimals on the dial
+        # realised = sign x setting x weight (the netlist's definition), to the printed digits
+        assert abs(float(row["realized"])) == pytest.approx(setting * weight, rel=1e-5)
+        want_pct = 100 * (float(row["realized"]) / float(row["coefficient"]) - 1)
+        assert float(row["error_pct"]) == pytest.approx(want_pct, abs=2e-3)
+        assert (row["amplifier"], row["input"], row["signal"]) == (p.amplifier, p.jack, p.signal)
+    # one case by hand (the recommended patch on the GP-6): theta into A7 through a x10 input
+    p2 = pot_rows(net)[1]
+    assert (p2["setting"], p2["signal"], p2["weight"], p2["realized"]) == ("0.915", "theta", 10, "9.15")
+
+
+def test_a_coefficient_of_zero_has_no_error_percentage(net):
+    odd = _with_zero_coefficient(net)
+    assert pot_rows(odd)[0]["error_pct"] == "inf"
+    assert "\nP1,0.107,s,A7,x1a,1,0,0.107,inf,\n" in pots_csv(odd)
+    console = Console(file=io.StringIO(), width=200, record=True)
+    console.print(pot_table(odd, GP6.procedure.pot_setting))
+    p1 = next(line for line in console.export_text().splitlines() if "P1" in line)
+    assert p1.rstrip().rstrip("│").strip().endswith("n/a")
+
+
+def test_terminal_table_names_the_machine_and_how_pots_are_set(net):
+    t = pot_table(net, "set in POT SET, load connected")
+    assert t.row_count == len(net.pots)
+    assert t.title == "Pot settings for bench-recommended on the Comdyna GP-6 (set in POT SET, load connected)"
+    console = Console(file=io.StringIO(), width=200, record=True)
+    console.print(t)
+    text = console.export_text()
+    assert "A7 x10a (x10)" in text and "-0.232 %" in text

@@ -153,7 +153,8 @@ def _amplifier(d: DeckLines, net: Netlist, reading: Reading, amp: Amplifier, mac
     sj, core, out = f"{n}_sj", f"{n}_core", _amp_out(amp.id)
     rms = levels.amplifier_V_rms
     fb = f"{n}_fb" if rms > 0 else out  # feedback is taken before an output-noise source
-    offset, bias = _drift_sources(stage, machine, levels.drift_V_per_s)
+    cap = _feedback_capacitor(stage, machine)
+    offset, bias = _drift_sources(stage, machine, cap, levels.drift_V_per_s)
     plus = f"{n}_plus" if offset else "0"
     d.comment(f"{amp.id}: {amp.role}, carries {amp.carries.polarity:+d} x {amp.carries.volts_per_unit} "
               f"V/unit x {amp.carries.quantity}")
@@ -192,32 +193,42 @@ def _amplifier(d: DeckLines, net: Netlist, reading: Reading, amp: Amplifier, mac
     if amp.role in ("summer", "inverter"):
         d.add(f"R_{n}_f {sj} {fb} {num(c.feedback_resistor_ohm)}")
     elif amp.role == "integrator":
-        d.add(f"C_{n}_f {sj} {fb} {num(c.integrator_capacitor_F)}")
+        d.add(f"C_{n}_f {sj} {fb} {num(cap)}")
         _capacitor_ic(d, sj, fb, amp, offset)
     elif amp.role == "lag":
-        tau = stage.tau_s
-        d.add(f"R_{n}_f {sj} {fb} {num(c.feedback_resistor_ohm)}",
-              f"C_{n}_f {sj} {fb} {num(tau / c.feedback_resistor_ohm)}")
+        d.add(f"R_{n}_f {sj} {fb} {num(c.feedback_resistor_ohm)}", f"C_{n}_f {sj} {fb} {num(cap)}")
         _capacitor_ic(d, sj, fb, amp, offset)
     else:  # pragma: no cover - the schema admits no other role
         raise ValueError(f"unknown amplifier role {amp.role!r}")
 
 
-def _drift_sources(stage: Stage, machine: MachineProfile, rate_V_per_s: float) -> tuple[float, float]:
+def _feedback_capacitor(stage: Stage, machine: MachineProfile) -> float | None:
+    """The feedback capacitor of an integrator or lag, from the time constant the reading resolved
+    (as patchgen's simulator takes it): an integrator's time scale over its x1 input resistor, a
+    lag's tau over the feedback resistor. None for the other roles."""
+    if stage.role == "integrator":
+        return stage.T_s / machine.components.input_resistor_ohm(1)
+    if stage.role == "lag":
+        return stage.tau_s / machine.components.feedback_resistor_ohm
+    return None
+
+
+def _drift_sources(stage: Stage, machine: MachineProfile, cap: float | None,
+                   rate_V_per_s: float) -> tuple[float, float]:
     """Offset voltage and bias current that drift an integrating amplifier as patchgen's simulator
-    drifts it (its output's rate, a lag's through its own capacitor): an integrator has the
-    profile's offset and bias, scaled to the run's rate; a lag, and an integrator whose profile has
-    no drift, a bias current alone. Other amplifiers do not drift."""
-    c, imp = machine.components, machine.imperfections
-    if not rate_V_per_s or not stage.stateful:
+    drifts it, at the run's rate through its feedback capacitor ``cap`` (C): an integrator has the
+    profile's offset e and bias i scaled so that e/(R C) + i/C is that rate; a lag, and an
+    integrator whose profile has no drift, a bias current alone. Other amplifiers do not drift."""
+    imp = machine.imperfections
+    if not rate_V_per_s or cap is None:
         return 0.0, 0.0
     if stage.role == "integrator":
-        profile = machine.integrator_drift_V_per_s()
-        if profile > 0:
-            k = rate_V_per_s / profile
+        own = (imp.integrator_offset_V / (machine.components.input_resistor_ohm(1) * cap)
+               + imp.integrator_bias_A / cap)
+        if own > 0:
+            k = rate_V_per_s / own
             return imp.integrator_offset_V * k, imp.integrator_bias_A * k
-        return 0.0, rate_V_per_s * c.integrator_capacitor_F
-    return 0.0, rate_V_per_s * stage.tau_s / c.feedback_resistor_ohm
+    return 0.0, rate_V_per_s * cap
 
 
 def _capacitor_ic(d: DeckLines, sj: str, out: str, amp: Amplifier, sj_V: float) -> None:

@@ -56,10 +56,12 @@ class Circuit:
 
     @property
     def n_sensors(self) -> int:
+        """How many sensors feed the circuit."""
         return len(self.sensor_ids)
 
     @property
     def n_amps(self) -> int:
+        """How many amplifiers the circuit has."""
         return len(self.amp_ids)
 
     def signal_index(self, name: str) -> int:

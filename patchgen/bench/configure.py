@@ -21,6 +21,7 @@ from patchgen.bench.kernel import (
     Wiring,
 )
 from patchgen.bench.lanes import ACT_GAIN, ACT_LAG, ACT_LAG_ZERO
+from patchgen.bench.noise_drift import noise_and_drift
 from patchgen.bench.results import SimSettings
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
@@ -66,26 +67,11 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     stride = max(1, round(scenario.record_dt_s / step))
     imp = machine.imperfections
 
-    sens = bench.sensors
-    if ideal or scenario.noise.mode == "off":
-        sensor_rms = {s: 0.0 for s in circuit.sensor_ids}
-        amp_rms = 0.0
-    elif scenario.noise.mode == "explicit":
-        sensor_rms = {s: scenario.noise.level(s) for s in circuit.sensor_ids}
-        amp_rms = scenario.noise.level("amplifier")
-    else:
-        sensor_rms = {s: float(sens.noise_V_rms.get(s, 0.0)) for s in circuit.sensor_ids}
-        amp_rms = imp.amplifier_noise_V_rms
-    s_proc = [noise_process(sensor_rms[s], sens.noise_bandwidth_Hz, step)
+    levels = noise_and_drift(circuit.sensor_ids, bench, machine, scenario, ideal)
+    sensor_rms, amp_rms, drift = levels.sensor_V_rms, levels.amplifier_V_rms, levels.drift_V_per_s
+    s_proc = [noise_process(sensor_rms[s], levels.sensor_bandwidth_Hz, step)
               for s in circuit.sensor_ids]
-    a_proc = noise_process(amp_rms, imp.noise_bandwidth_Hz, step)
-
-    if ideal or scenario.drift == "off":
-        drift = 0.0
-    elif scenario.drift == "profile":
-        drift = machine.integrator_drift_V_per_s()
-    else:
-        drift = float(scenario.drift)
+    a_proc = noise_process(amp_rms, levels.amplifier_bandwidth_Hz, step)
 
     act = bench.actuator
     if ideal:
@@ -136,8 +122,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     )
     settings = SimSettings(
         dt_s=step, steps=n_steps, record_dt_s=stride * step,
-        sensor_noise_V_rms=sensor_rms, sensor_noise_bandwidth_Hz=sens.noise_bandwidth_Hz,
-        amplifier_noise_V_rms=amp_rms, amplifier_noise_bandwidth_Hz=imp.noise_bandwidth_Hz,
+        sensor_noise_V_rms=sensor_rms, sensor_noise_bandwidth_Hz=levels.sensor_bandwidth_Hz,
+        amplifier_noise_V_rms=amp_rms, amplifier_noise_bandwidth_Hz=levels.amplifier_bandwidth_Hz,
         integrator_drift_V_per_s=drift,
         saturation_V=imp.saturation_V, saturation_clipped=not ideal,
         actuator=act_text, limit_switches=bool(bench.track.limit_switches),

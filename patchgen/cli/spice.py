@@ -12,6 +12,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from patchgen.bench.noise_drift import noise_and_drift
 from patchgen.bench.simulate import simulate
 from patchgen.design.lqg import design_on
 from patchgen.design.model import plant_params
@@ -64,10 +65,9 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_js
     d = design_on(sp, machine, bench)
     net = build_patch(d, machine)
     plant = plant_params(d.spec)
-    noise_on = (not ideal) and scenario.noise.mode != "off"
-    drift_on = (not ideal) and scenario.drift != "off" and scenario.drift != 0
+    levels = noise_and_drift([s.id for s in net.sensors], bench, machine, scenario, ideal)
     settings = SpiceSettings(duration_s=scenario.duration_s, step_s=step_s, x0=tuple(scenario.initial.vector()),
-                             noise=noise_on, drift=drift_on, actuator="ideal" if ideal else "bench",
+                             noise_and_drift=levels, actuator="ideal" if ideal else "bench",
                              seed=scenario.seed, disturbances=tuple(scenario.disturbances))
     deck = spice_deck(net, plant, bench, machine, settings)
     files: dict[str, str | bytes] = {"patch.cir": deck.text}

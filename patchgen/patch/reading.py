@@ -54,6 +54,7 @@ class Stage:
 
     @property
     def stateful(self) -> bool:
+        """True for integrators and lags: the output is a capacitor's state, not the present input."""
         return self.role in STATEFUL
 
 

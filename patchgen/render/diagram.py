@@ -241,12 +241,13 @@ def _on_segment(p, a, b) -> bool:
 
 
 def _render(d: schemdraw.Drawing) -> str:
-    """SVG text of the drawing, with schemdraw's process-wide id counters reset first."""
-    saved_text = svg_backend.config.text
+    """SVG text of the drawing: text as searchable <text> and clip ids counted from 0 for this
+    drawing alone (same netlist, same bytes); schemdraw's process-wide settings are restored after."""
+    saved_text, saved_clips = svg_backend.config.text, svg_backend.Figure.total_clips
     svg_backend.config.text = "text"     # searchable <text>, not glyph paths
     svg_backend.Figure.total_clips = 0
     try:
         data = d.get_imagedata("svg").decode("utf-8")
     finally:
-        svg_backend.config.text = saved_text
+        svg_backend.config.text, svg_backend.Figure.total_clips = saved_text, saved_clips
     return data if data.endswith("\n") else data + "\n"

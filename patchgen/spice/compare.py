@@ -29,10 +29,12 @@ class SignalAgreement:
 
     @property
     def rms_rel(self) -> float:
+        """RMS difference as a fraction of the peak (0 for a signal that stays at 0)."""
         return self.rms_diff / self.peak if self.peak > 0 else 0.0
 
     @property
     def max_rel(self) -> float:
+        """Largest difference as a fraction of the peak (0 for a signal that stays at 0)."""
         return self.max_diff / self.peak if self.peak > 0 else 0.0
 
 
@@ -50,6 +52,7 @@ class Comparison:
         return all(a.max_rel <= tolerance for a in self.signals.values())
 
     def lines(self) -> list[str]:
+        """One line of text per compared signal: its peak and differences in percent of it."""
         return [f"{a.name}: peak {a.peak:.4g}, RMS difference {100 * a.rms_rel:.3f} % of peak, "
                 f"largest difference {100 * a.max_rel:.3f} % of peak" for a in self.signals.values()]
 

@@ -1,18 +1,16 @@
-"""The patch at the electrical level: a SPICE deck of the patched machine and the bench, run in ngspice.
+"""The patch at the electrical level: a SPICE deck of the patched machine and the bench.
 
 patchgen's own simulator treats each amplifier as an ideal element. This module writes the patched
-circuit as a circuit simulator sees it: every amplifier an inverting op-amp macromodel with finite
-open-loop gain, output resistance and a feedback bound that keeps its output within the
-saturation voltage; the machine's
-input resistors (x1, x10), feedback resistors and capacitors; every pot a resistive divider loaded
-by the input resistor it feeds; integrator drift as an offset voltage and a bias current. The
-cart-pendulum (eq. 2.16-2.19, nonlinear) and the actuator are behavioural sources charging 1 F
-capacitors, so the whole loop runs in ngspice. An independent simulator that agrees with patchgen's
-own is the strongest check that a patch sheet is right.
-
-ngspice runs in batch mode as a subprocess (``ngspice -b deck.cir``); its ``wrdata`` table is read
-back. Volts on the machine; the plant's node voltages are its states in SI units (1 V = 1 m, 1 rad,
-1 m/s, 1 rad/s, 1 N).
+circuit, read once by patchgen.patch.reading, as a circuit simulator sees it: every amplifier an
+inverting op-amp macromodel with finite open-loop gain, output resistance and a feedback bound that
+keeps its output within the saturation voltage; the machine's input resistor for each weight its
+profile declares, feedback resistors and capacitors; every pot a resistive divider loaded by the
+input resistor it feeds; noise and drift as patchgen's simulator takes them
+(patchgen.bench.noise_drift), drift as an offset voltage and a bias current. The sensors' constants
+are the bench's (patchgen.bench.circuit.sensor_constants), as in the simulator. The cart-pendulum
+and the actuator are behavioural sources (patchgen.spice.plant), so the whole loop runs in ngspice
+(patchgen.spice.run). An independent simulator that agrees with patchgen's own is the strongest
+check that a patch sheet is right.
 """
 
 from __future__ import annotations
@@ -25,20 +23,22 @@ from typing import Literal
 import numpy as np
 
 from patchgen.bench.circuit import sensor_constants
+from patchgen.bench.noise_drift import NoiseAndDrift
 from patchgen.inputs.scenario import Disturbance
 from patchgen.patch.netlist import Amplifier, Netlist, Pot
-from patchgen.patch.reading import Stage, read
+from patchgen.patch.reading import Reading, Stage, read
 from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
-from patchgen.spice.elements import (
-    SMOOTHING,
-    bound,
-    clamp,
-    dead_zone,
-    num,
-    pot_wiper_position,
-    spice_name,
+from patchgen.spice.elements import DeckLines, bound, clamp, num, pot_wiper_position, spice_name
+from patchgen.spice.plant import (
+    CONTROL_NODE,
+    FORCE_NODE,
+    S_REF_NODE,
+    STATE_NODES,
+    actuator,
+    cart_pendulum,
+    disturbances,
 )
 
 DECK_NAME = "patch.cir"
@@ -46,30 +46,26 @@ DATA_NAME = "patch.data"
 NOISE_NAME = "patch.noise"
 INSTALL_HINT = ("install ngspice (Debian/Ubuntu: apt-get install ngspice) and make sure `ngspice` "
                 "is on the PATH")
-
-# Plant state nodes, in PLANT_STATES order; their voltages are the states in SI units.
-STATE_NODES = {"s": "x_s", "theta": "x_theta", "s_dot": "x_sdot", "theta_dot": "x_thetadot"}
-FORCE_NODE = "f_cart"
-S_REF_NODE = "s_ref"  # the cart-position reference a step disturbance moves
-EDGE_S = 1e-6  # s: the rise and fall of a push or step in the deck (the simulator's are sharp)
-CONTROL_NODE = "u_c"
+__all__ = ["CONTROL_NODE", "FORCE_NODE", "STATE_NODES", "SpiceDeck", "SpiceSettings", "output_vectors",
+           "spice_deck"]
 
 
 @dataclass(frozen=True)
 class SpiceSettings:
     """What a scenario asks of the circuit run: duration, output step, initial plant state, switches.
 
-    ``x0`` is [s, theta, s_dot, theta_dot] in SI units. ``actuator`` "bench" uses the bench
-    profile's actuator (lag, dead zone, force limit, limit switches); "ideal" is F = K_U u_c.
-    ``max_step_s`` bounds ngspice's time step (default: the output step). ``disturbances`` are
-    the scenario's pushes (on the cart or the pendulum tip) and cart-position steps, as sources.
+    ``x0`` is [s, theta, s_dot, theta_dot] in SI units. ``noise_and_drift`` gives the noise levels
+    and drift rate, as patchgen's simulator takes them (patchgen.bench.noise_drift; default none).
+    ``actuator`` "bench" uses the bench profile's actuator (lag, dead zone, force limit, limit
+    switches); "ideal" is F = K_U u_c. ``max_step_s`` bounds ngspice's time step (default: the
+    output step). ``disturbances`` are the scenario's pushes (on the cart or the pendulum tip) and
+    cart-position steps, as sources.
     """
 
     duration_s: float
     step_s: float
     x0: tuple[float, float, float, float]
-    noise: bool = False
-    drift: bool = False
+    noise_and_drift: NoiseAndDrift = NoiseAndDrift()
     actuator: Literal["bench", "ideal"] = "bench"
     max_step_s: float | None = None
     seed: int = 1
@@ -77,37 +73,16 @@ class SpiceSettings:
     disturbances: tuple[Disturbance, ...] = ()
 
 
-
-# ----------------------------------------------------------------------------------------------
-# Deck
-
-
-
-@dataclass
-class _Deck:
-    rng: np.random.Generator
-    lines: list[str] = field(default_factory=list)
-    noise: list[tuple[str, float, np.ndarray]] = field(default_factory=list)
-    ics: dict[str, float] = field(default_factory=dict)
-
-    def add(self, *lines: str) -> None:
-        self.lines.extend(lines)
-
-    def comment(self, text: str) -> None:
-        self.lines.append(f"* {text}")
+def _source_node(reading: Reading, source: str) -> str:
+    """The node carrying a source's voltage: a sensor's output or an amplifier's."""
+    return f"sens_{spice_name(source)}" if source in reading.sensors else _amp_out(source)
 
 
-def _source_node(net: Netlist, source: str) -> str:
-    if any(s.id == source for s in net.sensors):
-        return f"sens_{spice_name(source)}"
-    return _amp_out(net.amp(source))
+def _amp_out(amp_id: str) -> str:
+    return f"{spice_name(amp_id)}_out"
 
 
-def _amp_out(amp: Amplifier) -> str:
-    return f"{spice_name(amp.id)}_out"
-
-
-def _noise_source(d: _Deck, name: str, plus: str, minus: str, rms: float, bandwidth_Hz: float,
+def _noise_source(d: DeckLines, name: str, plus: str, minus: str, rms: float, bandwidth_Hz: float,
                   duration_s: float) -> None:
     """White noise of the given rms, sampled at twice its bandwidth and joined linearly, as a
     voltage source ``name`` (an E element) in series between ``minus`` and ``plus``. The samples
@@ -120,7 +95,7 @@ def _noise_source(d: _Deck, name: str, plus: str, minus: str, rms: float, bandwi
     d.add(f"{name} {plus} {minus} {d.noise[-1][0]} 0 1")
 
 
-def _noise_table(d: _Deck, duration_s: float) -> tuple[str, float]:
+def _noise_table(d: DeckLines, duration_s: float) -> tuple[str, float]:
     """The noise samples of every source on one time grid (the finest), and that grid's step."""
     dt = min(step for _, step, _ in d.noise)
     t = np.arange(int(math.ceil(duration_s / dt)) + 1) * dt
@@ -129,18 +104,19 @@ def _noise_table(d: _Deck, duration_s: float) -> tuple[str, float]:
     return "\n".join(rows) + "\n", dt
 
 
-def _sensors(d: _Deck, net: Netlist, bench: BenchProfile, machine: MachineProfile,
+def _sensors(d: DeckLines, net: Netlist, bench: BenchProfile, machine: MachineProfile,
              settings: SpiceSettings) -> None:
     """Sensor voltage = bench sensor constant x state, limited (smoothly) at the machine reference:
     the sensors cannot drive the patch beyond it, and a fallen pendulum (theta of many radians)
     would otherwise put hundreds of volts on the differentiator and stall ngspice's time step.
     Inside the reference the limit changes nothing (its rounding is below 1e-9 V up to 80 % of it)."""
     d.comment(f"Sensors: volts = bench sensor constant x state, limited at +/-{machine.reference_V} V")
+    levels = settings.noise_and_drift
     for s, k in zip(net.sensors, sensor_constants(net, bench)):
         if s.id not in STATE_NODES:
             raise ValueError(f"sensor {s.id!r} is not a plant state")
         node = f"sens_{spice_name(s.id)}"
-        rms = bench.sensors.noise_V_rms.get(s.id, 0.0) if settings.noise else 0.0
+        rms = levels.sensor_V_rms.get(s.id, 0.0)
         clean = f"{node}_clean" if rms > 0 else node
         state = f"v({STATE_NODES[s.id]})"
         if s.id == "s" and any(x.kind == "step" for x in settings.disturbances):
@@ -149,15 +125,15 @@ def _sensors(d: _Deck, net: Netlist, bench: BenchProfile, machine: MachineProfil
         d.add(f"B_sens_{spice_name(s.id)} {clean} 0 V = {volts}")
         if rms > 0:
             _noise_source(d, f"E_sens_{spice_name(s.id)}_noise", node, clean, rms,
-                          bench.sensors.noise_bandwidth_Hz, settings.duration_s)
+                          levels.sensor_bandwidth_Hz, settings.duration_s)
 
 
-def _pot(d: _Deck, net: Netlist, machine: MachineProfile, pot: Pot, load_ohm: float | None) -> str:
+def _pot(d: DeckLines, reading: Reading, machine: MachineProfile, pot: Pot, load_ohm: float | None) -> str:
     """A pot as two resistors; returns its wiper node. ``load_ohm`` None: no resistive load."""
     rp = machine.components.pot_resistance_ohm
     a = (pot_wiper_position(pot.setting, rp, load_ohm) if load_ohm is not None
          else min(max(pot.setting, 0.0), 1.0))
-    top, wiper = _source_node(net, pot.source), f"pot_{spice_name(pot.id)}_w"
+    top, wiper = _source_node(reading, pot.source), f"pot_{spice_name(pot.id)}_w"
     # A wiper at an end would make a zero resistor: keep a milliohm so the matrix stays regular.
     r_upper, r_lower = max((1.0 - a) * rp, 1e-3), max(a * rp, 1e-3)
     load_txt = f"load {num(load_ohm)} ohm" if load_ohm is not None else "no resistive load"
@@ -167,15 +143,19 @@ def _pot(d: _Deck, net: Netlist, machine: MachineProfile, pot: Pot, load_ohm: fl
     return wiper
 
 
-def _amplifier(d: _Deck, net: Netlist, amp: Amplifier, stage: Stage, machine: MachineProfile,
+def _amplifier(d: DeckLines, net: Netlist, reading: Reading, amp: Amplifier, machine: MachineProfile,
                settings: SpiceSettings) -> None:
-    c, imp = machine.components, machine.imperfections
+    """One amplifier: the op-amp macromodel, its output noise and drift sources, its input
+    resistors (through loaded pots) or capacitors, and its feedback element."""
+    c, imp, levels = machine.components, machine.imperfections, settings.noise_and_drift
+    stage = reading.amplifiers[amp.id]
     n = spice_name(amp.id)
-    sj, core, out = f"{n}_sj", f"{n}_core", _amp_out(amp)
-    rms = imp.amplifier_noise_V_rms if settings.noise else 0.0
+    sj, core, out = f"{n}_sj", f"{n}_core", _amp_out(amp.id)
+    rms = levels.amplifier_V_rms
     fb = f"{n}_fb" if rms > 0 else out  # feedback is taken before an output-noise source
-    drift = settings.drift and amp.role == "integrator"
-    plus = f"{n}_plus" if drift else "0"
+    cap = _feedback_capacitor(stage, machine)
+    offset, bias = _drift_sources(stage, machine, cap, levels.drift_V_per_s)
+    plus = f"{n}_plus" if offset else "0"
     d.comment(f"{amp.id}: {amp.role}, carries {amp.carries.polarity:+d} x {amp.carries.volts_per_unit} "
               f"V/unit x {amp.carries.quantity}")
     # Op-amp macromodel: finite open-loop gain (the non-inverting input grounded, or at the offset
@@ -186,16 +166,17 @@ def _amplifier(d: _Deck, net: Netlist, amp: Amplifier, stage: Stage, machine: Ma
           f"R_{n}_o {core} {fb} {num(max(c.opamp_output_resistance_ohm, 1e-3))}",
           f"B_{n}_bound {fb} {sj} I = {bound(f'v({fb})', vsat, c.feedback_resistor_ohm)}")
     if rms > 0:
-        _noise_source(d, f"E_{n}_noise", out, fb, rms, imp.noise_bandwidth_Hz, settings.duration_s)
-    if drift:
-        d.add(f"V_{n}_offset {plus} 0 DC {num(imp.integrator_offset_V)}",
-              f"I_{n}_bias {sj} 0 DC {num(imp.integrator_bias_A)}")
+        _noise_source(d, f"E_{n}_noise", out, fb, rms, levels.amplifier_bandwidth_Hz, settings.duration_s)
+    if offset:
+        d.add(f"V_{n}_offset {plus} 0 DC {num(offset)}")
+    if bias:
+        d.add(f"I_{n}_bias {sj} 0 DC {num(bias)}")
 
     pots = {p.id: p for p in net.pots}
     if amp.role == "differentiator":
         T_d, roll = stage.T_d_s, stage.rolloff_s  # as patchgen.patch.reading resolves them
         for inp in amp.inputs:
-            src = (_pot(d, net, machine, pots[inp.pot], None) if inp.pot else _source_node(net, inp.source))
+            src = (_pot(d, reading, machine, pots[inp.pot], None) if inp.pot else _source_node(reading, inp.source))
             cap = inp.weight * T_d / c.feedback_resistor_ohm
             mid = f"{n}_{spice_name(inp.jack)}_m"
             d.comment(f"{inp.jack}: input capacitor {num(cap)} F (x{inp.weight}, T_d {T_d} s; profile C "
@@ -207,23 +188,50 @@ def _amplifier(d: _Deck, net: Netlist, amp: Amplifier, stage: Stage, machine: Ma
 
     for inp in amp.inputs:
         r_in = machine.components.input_resistor_ohm(inp.weight)
-        src = (_pot(d, net, machine, pots[inp.pot], r_in) if inp.pot else _source_node(net, inp.source))
+        src = (_pot(d, reading, machine, pots[inp.pot], r_in) if inp.pot else _source_node(reading, inp.source))
         d.add(f"R_{n}_{spice_name(inp.jack)} {src} {sj} {num(r_in)}")
     if amp.role in ("summer", "inverter"):
         d.add(f"R_{n}_f {sj} {fb} {num(c.feedback_resistor_ohm)}")
     elif amp.role == "integrator":
-        d.add(f"C_{n}_f {sj} {fb} {num(c.integrator_capacitor_F)}")
-        _capacitor_ic(d, sj, fb, amp, imp.integrator_offset_V if drift else 0.0)
+        d.add(f"C_{n}_f {sj} {fb} {num(cap)}")
+        _capacitor_ic(d, sj, fb, amp, offset)
     elif amp.role == "lag":
-        tau = stage.tau_s
-        d.add(f"R_{n}_f {sj} {fb} {num(c.feedback_resistor_ohm)}",
-              f"C_{n}_f {sj} {fb} {num(tau / c.feedback_resistor_ohm)}")
-        _capacitor_ic(d, sj, fb, amp, 0.0)
+        d.add(f"R_{n}_f {sj} {fb} {num(c.feedback_resistor_ohm)}", f"C_{n}_f {sj} {fb} {num(cap)}")
+        _capacitor_ic(d, sj, fb, amp, offset)
     else:  # pragma: no cover - the schema admits no other role
         raise ValueError(f"unknown amplifier role {amp.role!r}")
 
 
-def _capacitor_ic(d: _Deck, sj: str, out: str, amp: Amplifier, sj_V: float) -> None:
+def _feedback_capacitor(stage: Stage, machine: MachineProfile) -> float | None:
+    """The feedback capacitor of an integrator or lag, from the time constant the reading resolved
+    (as patchgen's simulator takes it): an integrator's time scale over its x1 input resistor, a
+    lag's tau over the feedback resistor. None for the other roles."""
+    if stage.role == "integrator":
+        return stage.T_s / machine.components.input_resistor_ohm(1)
+    if stage.role == "lag":
+        return stage.tau_s / machine.components.feedback_resistor_ohm
+    return None
+
+
+def _drift_sources(stage: Stage, machine: MachineProfile, cap: float | None,
+                   rate_V_per_s: float) -> tuple[float, float]:
+    """Offset voltage and bias current that drift an integrating amplifier as patchgen's simulator
+    drifts it, at the run's rate through its feedback capacitor ``cap`` (C): an integrator has the
+    profile's offset e and bias i scaled so that e/(R C) + i/C is that rate; a lag, and an
+    integrator whose profile has no drift, a bias current alone. Other amplifiers do not drift."""
+    imp = machine.imperfections
+    if not rate_V_per_s or cap is None:
+        return 0.0, 0.0
+    if stage.role == "integrator":
+        own = (imp.integrator_offset_V / (machine.components.input_resistor_ohm(1) * cap)
+               + imp.integrator_bias_A / cap)
+        if own > 0:
+            k = rate_V_per_s / own
+            return imp.integrator_offset_V * k, imp.integrator_bias_A * k
+    return 0.0, rate_V_per_s * cap
+
+
+def _capacitor_ic(d: DeckLines, sj: str, out: str, amp: Amplifier, sj_V: float) -> None:
     """Initial condition of a feedback capacitor: both its ends are held during the operating
     point (the output at ic_V, the summing junction where the amplifier keeps it), as the IC mode
     charges the capacitor; holding only the output would let the open-loop amplifier saturate."""
@@ -231,92 +239,12 @@ def _capacitor_ic(d: _Deck, sj: str, out: str, amp: Amplifier, sj_V: float) -> N
     d.ics[sj] = float(sj_V)
 
 
-def _state_integrator(d: _Deck, node: str, rate_expr: str, x0: float) -> None:
-    """dx/dt = rate: a behavioural current into a 1 F capacitor (node voltage = x)."""
-    d.add(f"B_{node} 0 {node} I = {rate_expr}", f"C_{node} {node} 0 1")
-    d.ics[node] = float(x0)
-
-
-def _actuator(d: _Deck, plant: PlantParams, bench: BenchProfile, settings: SpiceSettings) -> None:
-    act = bench.actuator
-    uc = f"v({CONTROL_NODE})"
-    if settings.actuator == "ideal":
-        d.comment(f"Actuator: ideal gain K_U = {act.K_U} N/V")
-        d.add(f"B_force {FORCE_NODE} 0 V = {num(act.K_U)}*{uc}")
-        return
-    d.comment(f"Actuator ({bench.id}): {act.model}, K_U {act.K_U} N/V, tau {act.tau} s, dead zone "
-              f"+/-{act.dead_zone_V} V, force limit {act.force_limit_N} N")
-    if act.dead_zone_V > 0:
-        d.add(f"B_deadzone a_dz 0 V = {dead_zone(uc, act.dead_zone_V)}")
-    else:
-        d.add(f"B_deadzone a_dz 0 V = {uc}")
-    if act.model == "gain" or act.tau == 0.0:
-        raw = f"{num(act.K_U)}*v(a_dz)"
-    elif act.model == "lag":
-        _state_integrator(d, "a_lag", f"({num(act.K_U)}*v(a_dz) - v(a_lag))/{num(act.tau)}", 0.0)
-        raw = "v(a_lag)"
-    else:  # lag_zero: K_U s/(tau s + 1) = (K_U/tau) (1 - 1/(tau s + 1))
-        _state_integrator(d, "a_lag", f"(v(a_dz) - v(a_lag))/{num(act.tau)}", 0.0)
-        raw = f"{num(act.K_U / act.tau)}*(v(a_dz) - v(a_lag))"
-    d.add(f"B_force_raw a_raw 0 V = {raw}")
-    force = clamp("v(a_raw)", act.force_limit_N)
-    if bench.track.limit_switches:
-        half, w = num(plant.d / 2), num(SMOOTHING * plant.d / 2)
-        s = f"v({STATE_NODES['s']})"
-        d.comment(f"Limit switches at +/- d/2 = {plant.d / 2} m cut motor power")
-        force = f"({force})*0.25*(1+tanh(({half}-{s})/{w}))*(1+tanh(({half}+{s})/{w}))"
-    d.add(f"B_force {FORCE_NODE} 0 V = {force}")
-
-
-
-def _disturbances(d: _Deck, settings: SpiceSettings) -> dict[str, str]:
-    """A source per push or step of the scenario (a rectangle or a step with EDGE_S edges, as the
-    simulator applies them); returns the cart push, tip push and reference expressions ('' for
-    none) and writes the reference node when there is a step."""
-    parts: dict[str, list[str]] = {"cart": [], "tip": [], "step": []}
-    for i, x in enumerate(settings.disturbances):
-        node, t0 = f"dist_{i}", x.time_s
-        if x.kind == "step":
-            points = [(0.0, 0.0), (t0, 0.0), (t0 + EDGE_S, x.size_m)]
-            parts["step"].append(f"v({node})")
-        else:
-            t1 = t0 + x.duration_s
-            points = [(0.0, 0.0), (t0, 0.0), (t0 + EDGE_S, x.force_N), (t1, x.force_N), (t1 + EDGE_S, 0.0)]
-            parts["tip" if x.at == "pendulum_tip" else "cart"].append(f"v({node})")
-        points = [pt for k, pt in enumerate(points) if k == 0 or pt[0] > points[k - 1][0]]  # a push at t = 0
-        d.comment(f"Disturbance {i}: {x.kind} at {t0} s")
-        d.add(f"V_{node} {node} 0 PWL(" + " ".join(f"{num(t)} {num(v)}" for t, v in points) + ")")
-    if parts["step"]:
-        d.add(f"B_sref {S_REF_NODE} 0 V = " + "+".join(parts["step"]))
-    return {k: "+".join(v) for k, v in parts.items()}
-
-
-def _plant(d: _Deck, plant: PlantParams, settings: SpiceSettings, push: dict[str, str]) -> None:
-    """Eq. 2.16-2.19 with theta_dot^2 in the centripetal term (as patchgen.plant.equations.nonlinear_rhs),
-    with the pushes of the scenario on the cart and, at distance l, on the pendulum tip
-    (generalised forces F_tip on s and F_tip l cos(theta) on theta, as the simulator's)."""
-    M, m, l, g, b, c = (num(v) for v in (plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c))
-    th, sd, thd = (f"v({STATE_NODES[k]})" for k in ("theta", "s_dot", "theta_dot"))
-    d.comment(f"Cart-pendulum, eq. 2.16-2.19: M {plant.M} kg, m {plant.m} kg, l {plant.l} m, "
-              f"b_VF {plant.b_VF} kg/s, c {plant.c} kg m^2/s")
-    cart = f" + {push['cart']}" if push["cart"] else ""
-    tip_s = f" + ({push['tip']})*sin({th})*sin({th})" if push["tip"] else ""
-    tip_th = f" + ({push['tip']})*cos({th})/({m}*{l})" if push["tip"] else ""
-    d.add(f"B_sdd x_sdd 0 V = (-{b}*{sd} + {m}*{l}*{thd}*{thd}*sin({th}) + ({c}/{l})*{thd}*cos({th})"
-          f" - {m}*{g}*sin({th})*cos({th}) + v({FORCE_NODE}){cart}{tip_s}) / (({M}+{m}) - {m}*cos({th})*cos({th}))",
-          f"B_thdd x_thdd 0 V = -({c}/({m}*{l}*{l}))*{thd} + ({g}/{l})*sin({th}){tip_th} - cos({th})*v(x_sdd)/{l}")
-    x0 = dict(zip(PLANT_STATES, settings.x0))
-    _state_integrator(d, STATE_NODES["s"], sd, x0["s"])
-    _state_integrator(d, STATE_NODES["theta"], thd, x0["theta"])
-    _state_integrator(d, STATE_NODES["s_dot"], "v(x_sdd)", x0["s_dot"])
-    _state_integrator(d, STATE_NODES["theta_dot"], "v(x_thdd)", x0["theta_dot"])
-
-
 def output_vectors(net: Netlist) -> list[tuple[str, str]]:
-    """(signal name, ngspice vector) written by ``wrdata``, in column order."""
+    """(signal name, ngspice vector) written by ``wrdata``, in column order: the plant states, u_c,
+    the force and every amplifier's output (netlist order)."""
     vecs = [(k, f"v({STATE_NODES[k]})") for k in PLANT_STATES]
     vecs += [("u_c", f"v({CONTROL_NODE})"), ("force", f"v({FORCE_NODE})")]
-    vecs += [(a.id, f"v({_amp_out(a)})") for a in net.amplifiers]
+    vecs += [(a.id, f"v({_amp_out(a.id)})") for a in net.amplifiers]
     return vecs
 
 
@@ -348,18 +276,19 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     if machine.id != net.machine:
         raise ValueError(f"netlist is for machine {net.machine!r}, profile is {machine.id!r}")
     reading = read(net, machine.imperfections.differentiator_rolloff_s)  # checks the wiring, too
-    d = _Deck(np.random.default_rng(settings.seed))
+    d = DeckLines(np.random.default_rng(settings.seed))
     d.add(f"patchgen: {net.design} on {machine.name}, bench {bench.name}")
     d.comment("Written by patchgen (patchgen.spice.deck). Volts on the machine; plant nodes carry SI states.")
-    d.comment(f"Noise {'on' if settings.noise else 'off'}, drift {'on' if settings.drift else 'off'}, "
+    levels = settings.noise_and_drift
+    d.comment(f"Noise {'on' if levels.noisy else 'off'}, drift {'on' if levels.drift_V_per_s else 'off'}, "
               f"actuator {settings.actuator}")
     _sensors(d, net, bench, machine, settings)
     for amp in net.amplifiers:
-        _amplifier(d, net, amp, reading.amplifiers[amp.id], machine, settings)
-    d.comment(f"Control voltage u_c = output of {net.output.source}")
-    d.add(f"V_uc {CONTROL_NODE} {_source_node(net, net.output.source)} DC 0")
-    _actuator(d, plant, bench, settings)
-    _plant(d, plant, settings, _disturbances(d, settings))
+        _amplifier(d, net, reading, amp, machine, settings)
+    d.comment(f"Control voltage u_c = output of {reading.output}")
+    d.add(f"V_uc {CONTROL_NODE} {_source_node(reading, reading.output)} DC 0")
+    actuator(d, plant, bench, settings.actuator == "ideal")
+    cart_pendulum(d, plant, settings.x0, disturbances(d, settings.disturbances))
 
     max_step = settings.max_step_s or settings.step_s
     files: dict[str, str] = {}

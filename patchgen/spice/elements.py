@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import dataclass, field
+
+import numpy as np
 
 # The actuator's dead zone, force limit and the track's limit switches are written with max/abs
 # and their corners rounded (softplus) over this fraction of their size, so Newton's iteration sees
@@ -81,3 +84,28 @@ def clamp(x: str, limit: float) -> str:
     """Smoothed limit to +/-limit."""
     w, lim = SMOOTHING * limit, num(limit)
     return f"{x}-{softplus(f'({x}-{lim})', w)}+{softplus(f'(-({x})-{lim})', w)}"
+
+
+@dataclass
+class DeckLines:
+    """A deck being written: its lines, its noise sources' samples (name, step, values) from
+    one seeded generator, and the initial voltages of its capacitor nodes."""
+
+    rng: np.random.Generator
+    lines: list[str] = field(default_factory=list)
+    noise: list[tuple[str, float, np.ndarray]] = field(default_factory=list)
+    ics: dict[str, float] = field(default_factory=dict)
+
+    def add(self, *lines: str) -> None:
+        """Append deck lines."""
+        self.lines.extend(lines)
+
+    def comment(self, text: str) -> None:
+        """Append a comment line."""
+        self.lines.append(f"* {text}")
+
+
+def state_integrator(d: DeckLines, node: str, rate_expr: str, x0: float) -> None:
+    """dx/dt = rate: a behavioural current into a 1 F capacitor (node voltage = x)."""
+    d.add(f"B_{node} 0 {node} I = {rate_expr}", f"C_{node} {node} 0 1")
+    d.ics[node] = float(x0)

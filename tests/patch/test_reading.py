@@ -106,3 +106,71 @@ def test_engine_and_deck_take_the_sensor_constants_from_the_bench():
         line = next(ln for ln in deck.splitlines() if ln.startswith(f"B_sens_{sid} "))
         assert f"{float(k)!r}*v(" in line, line
         assert f"{3 * float(k)!r}*v(" not in line
+
+
+def _hand_built(extra_s2_input: str | None = None) -> Netlist:
+    """theta -> S1 (x10 through P2 = 0.3) -> S2 (inverter) -> S3 -> u_c, and I1 integrating theta
+    and S3 (x1 through P1 = 0.5) into S3: a feedback loop closed through the integrator."""
+    def amp(aid, role, inputs):
+        return {"id": aid, "role": role, "purpose": "", "ic_V": 0.0 if role == "integrator" else None,
+                "carries": {"quantity": "x", "polarity": 1, "volts_per_unit": 1.0, "unit": "1"},
+                "inputs": [{"source": s, "weight": w, "jack": f"x{w}{'abc'[k]}", "pot": p}
+                           for k, (s, w, p) in enumerate(inputs)]}
+
+    def pot(pid, source, amplifier, weight, setting):
+        return {"id": pid, "source": source, "signal": source, "amplifier": amplifier, "jack": f"x{weight}a",
+                "weight": weight, "coefficient": setting * weight, "realized": setting * weight,
+                "setting": setting, "note": ""}
+
+    s2_inputs = [("S1", 1, None)] + ([(extra_s2_input, 1, None)] if extra_s2_input else [])
+    data = {**{k: v for k, v in FIXTURE.items() if k not in ("amplifiers", "pots", "sensors", "output")},
+            "sensors": [FIXTURE["sensors"][1]],
+            "amplifiers": [amp("I1", "integrator", [("theta", 1, None), ("S3", 1, "P1")]),
+                           amp("S1", "summer", [("theta", 10, "P2")]),
+                           amp("S2", "inverter", s2_inputs),
+                           amp("S3", "summer", [("S2", 1, None), ("I1", 1, None)])],
+            "pots": [pot("P1", "S3", "I1", 1, 0.5), pot("P2", "theta", "S1", 10, 0.3)],
+            "output": {**FIXTURE["output"], "source": "S3"}}
+    return Netlist.model_validate(data)
+
+
+def test_a_hand_built_netlist_reads_as_worked_out_by_hand():
+    r = read(_hand_built())
+    assert r.sensors == ("theta",) and r.output == "S3"
+    assert [(f.source, f.gain) for f in r.amplifiers["I1"].feeds] == [("theta", 1.0), ("S3", 0.5)]
+    assert [(f.source, f.gain) for f in r.amplifiers["S1"].feeds] == [("theta", pytest.approx(3.0))]
+    assert r.order == ("I1", "S1", "S2", "S3")  # the integrator's output is a state: first
+    assert [r.amplifiers[a].stateful for a in r.order] == [True, False, False, False]
+    # inversions to u_c: S3 one, S2 two, S1 three, I1 two (through S3; the loop back is no path)
+    assert [r.path_sign(a) for a in ("S3", "S2", "S1", "I1")] == [-1, 1, -1, 1]
+    # stages: S1 after theta, S2 after S1; the loop I1 <-> S3 broken at the integrator I1,
+    # placed after theta; S3 after its latest source S2
+    assert r.levels() == {"theta": 0, "S1": 1, "S2": 2, "I1": 1, "S3": 3}
+    assert r.fed_by() == {"theta": ["I1", "S1"], "S3": ["I1"], "S1": ["S2"], "S2": ["S3"], "I1": ["S3"]}
+
+
+def test_a_hand_built_ring_names_its_amplifiers():
+    with pytest.raises(AlgebraicLoopError) as exc:
+        read(_hand_built(extra_s2_input="S3"))
+    assert exc.value.field == "amplifiers"
+    assert "algebraic loop S2 -> S3 -> S2" in str(exc.value)
+    read(_hand_built(extra_s2_input="I1"))  # through the integrator: no algebraic loop
+
+
+def test_engine_and_deck_take_the_integrators_time_scale_from_the_reading():
+    """A netlist scaled for a 2 s integrator: the simulator integrates at 1/2 per second and the
+    deck's feedback capacitor is 2 s over the x1 input resistor, not the profile's 1 uF; drift
+    at the profile's rate through that capacitor takes twice the profile's offset and bias."""
+    from patchgen.bench.noise_drift import noise_and_drift
+    from patchgen.inputs.scenario import Scenario
+
+    net, gp6, uw = _net(lambda d: d.update(time_scale_s=2.0)), load_machine("gp6"), load_bench("uw-1991")
+    assert read(net).amplifiers["A1"].T_s == 2.0
+    c = compile_circuit(net, gp6, uw)
+    assert c.param1[c.amp_ids.index("A1")] == 0.5
+    levels = noise_and_drift(["s", "theta", "s_dot"], uw, gp6, Scenario(duration_s=1.0, noise="off"))
+    plant = PlantParams(M=3.552, m=0.324, l=0.429, g=9.807, b_VF=2.5775, c=0.001, d=1.090)
+    deck = spice_deck(net, plant, uw, gp6, SpiceSettings(1.0, 0.01, (0, 0.1, 0, 0), noise_and_drift=levels)).text
+    assert gp6.components.integrator_capacitor_F == 1e-6 and gp6.components.input_resistor_x1_ohm == 1e6
+    assert "C_a1_f a1_sj a1_out 2e-06" in deck
+    assert "V_a1_offset a1_plus 0 DC 0.004" in deck and "I_a1_bias a1_sj 0 DC 6e-09" in deck

@@ -102,3 +102,21 @@ def test_quantity_labels():
     assert quantity_label("int_theta") == "∫θ"
     assert quantity_label("xhat_s") == "s\u0302"
     assert quantity_label("u_c") == "u_c"
+
+
+def test_drawing_leaves_schemdraws_settings_as_it_found_them():
+    """The diagram's clip numbering, text mode, font and line width hold for its own drawing only."""
+    from schemdraw.schemdraw import schemdrawstyle
+
+    from patchgen.render.schematic import svg_backend
+
+    text_mode, style = svg_backend.config.text, dict(schemdrawstyle)
+    svg_backend.Figure.total_clips = 7
+    try:
+        svg = wiring_svg(read_netlist(FIXTURE))
+        assert svg_backend.Figure.total_clips == 7
+        assert svg == wiring_svg(read_netlist(FIXTURE))  # clip ids counted from 0 each time
+        assert svg_backend.config.text == text_mode
+        assert schemdrawstyle == style
+    finally:
+        svg_backend.Figure.total_clips = 0

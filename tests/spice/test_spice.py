@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from patchgen.bench.noise_drift import noise_and_drift
+from patchgen.inputs.scenario import Scenario
 from patchgen.patch.netlist import Netlist, read_netlist
 from patchgen.plant.equations import PlantParams, nonlinear_rhs
 from patchgen.profiles.bench import BenchProfile, load_bench
@@ -28,6 +30,14 @@ PLANT = PlantParams(M=3.552, m=0.324, l=0.429, g=9.807, b_VF=2.5775, c=0.001, d=
 # The 10 deg offset scenario: 10 s, released at rest.
 SETTINGS = SpiceSettings(duration_s=10.0, step_s=0.005, x0=(0.0, math.radians(10.0), 0.0, 0.0),
                          actuator="ideal")
+
+
+
+def _levels(net, bench, machine, noise="profile", drift="profile"):
+    """The noise and drift of a scenario asking for them (the profiles' by default)."""
+    return noise_and_drift([s.id for s in net.sensors], bench, machine,
+                           Scenario(duration_s=1.0, noise=noise, drift=drift))
+
 
 needs_ngspice = pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not on the PATH")
 
@@ -192,7 +202,8 @@ def test_deck_has_every_amplifier_pot_and_profile_value(net, gp6, bench):
 
 
 def test_noise_and_drift_switch_their_sources(net, gp6, bench):
-    deck = spice_deck(net, PLANT, bench, gp6, replace(SETTINGS, noise=True, drift=True, actuator="bench"))
+    settings = replace(SETTINGS, noise_and_drift=_levels(net, bench, gp6), actuator="bench")
+    deck = spice_deck(net, PLANT, bench, gp6, settings)
     text = deck.text
     assert "V_a1_offset a1_plus 0 DC 0.002" in text  # integrator_offset_V of gp6.toml
     assert "I_a1_bias a1_sj 0 DC 3e-09" in text  # integrator_bias_A of gp6.toml
@@ -213,7 +224,7 @@ def test_noise_and_drift_switch_their_sources(net, gp6, bench):
 
 
 def test_deck_is_deterministic(net, gp6, bench):
-    noisy = replace(SETTINGS, noise=True, drift=True, seed=7)
+    noisy = replace(SETTINGS, noise_and_drift=_levels(net, bench, gp6), seed=7)
     a = spice_deck(net, PLANT, bench, gp6, noisy)
     b = spice_deck(read_netlist(FIXTURE), PLANT, bench, gp6, noisy)
     assert a == b
@@ -297,7 +308,7 @@ def test_bench_actuator_agrees_until_saturation_and_the_pendulum_falls(net, gp6,
 @needs_ngspice
 def test_integrator_drift_rate_is_the_profiles(net, gp6, bench, tmp_path):
     # At rest (all states 0) only drift moves the integrator A1: e_os/(R C) + i_b/C = 5 mV/s.
-    settings = replace(SETTINGS, x0=(0.0, 0.0, 0.0, 0.0), drift=True)
+    settings = replace(SETTINGS, x0=(0.0, 0.0, 0.0, 0.0), noise_and_drift=_levels(net, bench, gp6, noise="off"))
     result = run_ngspice(spice_deck(net, PLANT, bench, gp6, settings), tmp_path)
     rate = np.polyfit(result.t, result.signals["A1"], 1)[0]
     assert rate == pytest.approx(gp6.integrator_drift_V_per_s(), rel=0.02)
@@ -306,12 +317,13 @@ def test_integrator_drift_rate_is_the_profiles(net, gp6, bench, tmp_path):
 
 @needs_ngspice
 def test_noisy_bench_run_is_reproducible(net, gp6, bench, tmp_path):
-    settings = replace(SETTINGS, actuator="bench", noise=True, drift=True, duration_s=1.0, seed=3)
+    settings = replace(SETTINGS, actuator="bench", noise_and_drift=_levels(net, bench, gp6), duration_s=1.0, seed=3)
     deck = spice_deck(net, PLANT, bench, gp6, settings)
     a = run_ngspice(deck, tmp_path / "a")
     b = run_ngspice(deck, tmp_path / "b")
     assert (tmp_path / "a" / "patch.data").read_bytes() == (tmp_path / "b" / "patch.data").read_bytes()
-    quiet = run_ngspice(spice_deck(net, PLANT, bench, gp6, replace(settings, noise=False)), tmp_path / "c")
+    drift_only = replace(settings, noise_and_drift=_levels(net, bench, gp6, noise="off"))
+    quiet = run_ngspice(spice_deck(net, PLANT, bench, gp6, drift_only), tmp_path / "c")
     # Noise moves u_c (A7 sums 2 mV sensor noise through x10 inputs and the differentiator).
     assert np.max(np.abs(np.interp(quiet.t, a.t, a.signals["u_c"]) - quiet.signals["u_c"])) > 0.01
     assert len(a.t) == len(b.t)

@@ -1,0 +1,95 @@
+"""The bench in a SPICE deck: the cart-pendulum, its actuator and the scenario's pushes and steps,
+as behavioural sources charging 1 F capacitors. The plant's node voltages are its states in SI
+units (1 V = 1 m, 1 rad, 1 m/s, 1 rad/s); the force node's is the force on the cart in N."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from patchgen.inputs.scenario import Disturbance
+from patchgen.plant.equations import PLANT_STATES, PlantParams
+from patchgen.profiles.bench import BenchProfile
+from patchgen.spice.elements import SMOOTHING, DeckLines, clamp, dead_zone, num, state_integrator
+
+# Plant state nodes, in PLANT_STATES order; their voltages are the states in SI units.
+STATE_NODES = {"s": "x_s", "theta": "x_theta", "s_dot": "x_sdot", "theta_dot": "x_thetadot"}
+FORCE_NODE = "f_cart"
+S_REF_NODE = "s_ref"  # the cart-position reference a step disturbance moves
+EDGE_S = 1e-6  # s: the rise and fall of a push or step in the deck (the simulator's are sharp)
+CONTROL_NODE = "u_c"
+
+
+def actuator(d: DeckLines, plant: PlantParams, bench: BenchProfile, ideal: bool) -> None:
+    """The force on the cart from u_c: the ideal gain K_U, or the bench's actuator (dead zone,
+    lag or lag with a zero, force limit) and, when the track has them, its limit switches."""
+    act = bench.actuator
+    uc = f"v({CONTROL_NODE})"
+    if ideal:
+        d.comment(f"Actuator: ideal gain K_U = {act.K_U} N/V")
+        d.add(f"B_force {FORCE_NODE} 0 V = {num(act.K_U)}*{uc}")
+        return
+    d.comment(f"Actuator ({bench.id}): {act.model}, K_U {act.K_U} N/V, tau {act.tau} s, dead zone "
+              f"+/-{act.dead_zone_V} V, force limit {act.force_limit_N} N")
+    if act.dead_zone_V > 0:
+        d.add(f"B_deadzone a_dz 0 V = {dead_zone(uc, act.dead_zone_V)}")
+    else:
+        d.add(f"B_deadzone a_dz 0 V = {uc}")
+    if act.model == "gain" or act.tau == 0.0:
+        raw = f"{num(act.K_U)}*v(a_dz)"
+    elif act.model == "lag":
+        state_integrator(d, "a_lag", f"({num(act.K_U)}*v(a_dz) - v(a_lag))/{num(act.tau)}", 0.0)
+        raw = "v(a_lag)"
+    else:  # lag_zero: K_U s/(tau s + 1) = (K_U/tau) (1 - 1/(tau s + 1))
+        state_integrator(d, "a_lag", f"(v(a_dz) - v(a_lag))/{num(act.tau)}", 0.0)
+        raw = f"{num(act.K_U / act.tau)}*(v(a_dz) - v(a_lag))"
+    d.add(f"B_force_raw a_raw 0 V = {raw}")
+    force = clamp("v(a_raw)", act.force_limit_N)
+    if bench.track.limit_switches:
+        half, w = num(plant.d / 2), num(SMOOTHING * plant.d / 2)
+        s = f"v({STATE_NODES['s']})"
+        d.comment(f"Limit switches at +/- d/2 = {plant.d / 2} m cut motor power")
+        force = f"({force})*0.25*(1+tanh(({half}-{s})/{w}))*(1+tanh(({half}+{s})/{w}))"
+    d.add(f"B_force {FORCE_NODE} 0 V = {force}")
+
+
+def disturbances(d: DeckLines, pushes: Sequence[Disturbance]) -> dict[str, str]:
+    """A source per push or step of the scenario (a rectangle or a step with EDGE_S edges, as the
+    simulator applies them); returns the cart push, tip push and reference expressions ('' for
+    none) and writes the reference node when there is a step."""
+    parts: dict[str, list[str]] = {"cart": [], "tip": [], "step": []}
+    for i, x in enumerate(pushes):
+        node, t0 = f"dist_{i}", x.time_s
+        if x.kind == "step":
+            points = [(0.0, 0.0), (t0, 0.0), (t0 + EDGE_S, x.size_m)]
+            parts["step"].append(f"v({node})")
+        else:
+            t1 = t0 + x.duration_s
+            points = [(0.0, 0.0), (t0, 0.0), (t0 + EDGE_S, x.force_N), (t1, x.force_N), (t1 + EDGE_S, 0.0)]
+            parts["tip" if x.at == "pendulum_tip" else "cart"].append(f"v({node})")
+        points = [pt for k, pt in enumerate(points) if k == 0 or pt[0] > points[k - 1][0]]  # a push at t = 0
+        d.comment(f"Disturbance {i}: {x.kind} at {t0} s")
+        d.add(f"V_{node} {node} 0 PWL(" + " ".join(f"{num(t)} {num(v)}" for t, v in points) + ")")
+    if parts["step"]:
+        d.add(f"B_sref {S_REF_NODE} 0 V = " + "+".join(parts["step"]))
+    return {k: "+".join(v) for k, v in parts.items()}
+
+
+def cart_pendulum(d: DeckLines, plant: PlantParams, x0: Sequence[float], push: dict[str, str]) -> None:
+    """Eq. 2.16-2.19 with theta_dot^2 in the centripetal term (as patchgen.plant.equations.nonlinear_rhs),
+    with the pushes of the scenario on the cart and, at distance l, on the pendulum tip
+    (generalised forces F_tip on s and F_tip l cos(theta) on theta, as the simulator's)."""
+    M, m, l, g, b, c = (num(v) for v in (plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c))
+    th, sd, thd = (f"v({STATE_NODES[k]})" for k in ("theta", "s_dot", "theta_dot"))
+    d.comment(f"Cart-pendulum, eq. 2.16-2.19: M {plant.M} kg, m {plant.m} kg, l {plant.l} m, "
+              f"b_VF {plant.b_VF} kg/s, c {plant.c} kg m^2/s")
+    cart = f" + {push['cart']}" if push["cart"] else ""
+    tip_s = f" + ({push['tip']})*sin({th})*sin({th})" if push["tip"] else ""
+    tip_th = f" + ({push['tip']})*cos({th})/({m}*{l})" if push["tip"] else ""
+    d.add(f"B_sdd x_sdd 0 V = (-{b}*{sd} + {m}*{l}*{thd}*{thd}*sin({th}) + ({c}/{l})*{thd}*cos({th})"
+          f" - {m}*{g}*sin({th})*cos({th}) + v({FORCE_NODE}){cart}{tip_s}) / (({M}+{m}) - {m}*cos({th})*cos({th}))",
+          f"B_thdd x_thdd 0 V = -({c}/({m}*{l}*{l}))*{thd} + ({g}/{l})*sin({th}){tip_th} - cos({th})*v(x_sdd)/{l}")
+    x0 = dict(zip(PLANT_STATES, x0))
+    state_integrator(d, STATE_NODES["s"], sd, x0["s"])
+    state_integrator(d, STATE_NODES["theta"], thd, x0["theta"])
+    state_integrator(d, STATE_NODES["s_dot"], "v(x_sdd)", x0["s_dot"])
+    state_integrator(d, STATE_NODES["theta_dot"], "v(x_thdd)", x0["theta_dot"])

@@ -72,6 +72,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     s_proc = [noise_process(sensor_rms[s], levels.sensor_bandwidth_Hz, step)
               for s in circuit.sensor_ids]
     a_proc = noise_process(amp_rms, levels.amplifier_bandwidth_Hz, step)
+    f_proc = [noise_process(rms, levels.force_bandwidth_Hz, step)
+              for rms in (levels.cart_force_N_rms, levels.tip_force_N_rms)]
 
     act = bench.actuator
     if ideal:
@@ -110,8 +112,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
             actuator=int(model), K_U=float(act.K_U), tau=float(tau), dead_zone=float(dead),
             force_limit=float(flim)),
         sensors=Sensors(state=_i64(circuit.sensor_state), gain=_f64(circuit.sensor_gain)),
-        noise=Noise(a=_f64([p[0] for p in s_proc] + [a_proc[0]] * circuit.n_amps),
-                    std=_f64([p[1] for p in s_proc] + [a_proc[1]] * circuit.n_amps)),
+        noise=Noise(a=_f64([p[0] for p in s_proc] + [a_proc[0]] * circuit.n_amps + [p[0] for p in f_proc]),
+                    std=_f64([p[1] for p in s_proc] + [a_proc[1]] * circuit.n_amps + [p[1] for p in f_proc])),
         wiring=Wiring(kind=_i64(circuit.amp_kind), in_ptr=_i64(circuit.in_ptr), in_src=_i64(circuit.in_src),
                       in_gain=_f64(circuit.in_gain), param1=_f64(circuit.param1),
                       param2=_f64(circuit.param2), ic=_f64(circuit.ic_V),
@@ -125,6 +127,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         sensor_noise_V_rms=sensor_rms, sensor_noise_bandwidth_Hz=levels.sensor_bandwidth_Hz,
         amplifier_noise_V_rms=amp_rms, amplifier_noise_bandwidth_Hz=levels.amplifier_bandwidth_Hz,
         integrator_drift_V_per_s=drift,
+        cart_force_N_rms=levels.cart_force_N_rms, tip_force_N_rms=levels.tip_force_N_rms,
+        force_bandwidth_Hz=levels.force_bandwidth_Hz,
         saturation_V=imp.saturation_V, saturation_clipped=not ideal,
         actuator=act_text, limit_switches=bool(bench.track.limit_switches),
         half_track_m=plant.d / 2,

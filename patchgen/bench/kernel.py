@@ -2,7 +2,8 @@
 array (quantity, lane), every inner loop over lanes (patchgen.bench.lanes, patchgen.bench.noise), so that LLVM
 vectorises each operation across runs.
 
-One step of one block: draw the lanes' noise, four RK4 stages of plant + actuator + circuit,
+One step of one block: draw the lanes' noise (sensors, amplifiers, random forces on the plant),
+four RK4 stages of plant + actuator + circuit,
 clip integrating amplifiers at the rails, check limit switches, fall and overloads. A lane whose
 run has ended (the limit switches cut the motor) keeps being computed with the others but is no
 longer recorded; the block stops when every lane has ended or at the scenario's end.
@@ -41,7 +42,7 @@ from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "16954f3d8c8db38e"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_IN = "e055ba30ec43920f"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 64  # runs per block
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 N_STATES = len(PLANT_STATES)
@@ -98,7 +99,8 @@ class Sensors(NamedTuple):
 
 
 class Noise(NamedTuple):
-    """Per channel (the sensors, then the amplifiers): held noise n' = a n + std w."""
+    """Per channel (the sensors, the amplifiers, then the random forces on the cart and at the
+    tip, N): held noise n' = a n + std w."""
 
     a: np.ndarray
     std: np.ndarray  # V
@@ -154,7 +156,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     limit_on, clip, out_index = settings.limit_switches, settings.clip, settings.output
     keys, signs, plants = draws.keys, draws.signs, draws.plants
     ns, na = sensors.state.shape[0], wiring.kind.shape[0]
-    nch = ns + na
+    nch = noise.a.shape[0]  # ns + na voltages, then the two forces
     pc = np.empty((N_COEF, nl))
     half = np.empty(nl)
     k0 = np.empty(nl, dtype=np.uint64)
@@ -220,7 +222,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
         for st in range(4):
             _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat)
             circuit(xt, zt, s_ref, nz, sensors, wiring, drift, sat, clip, sig, raw, ka, st, acc)
-            drive(xt, xat, sig, out_index, tripped, pc, settings, f_cart, f_tip, kp, kx, forces, st)
+            drive(xt, xat, sig, out_index, tripped, pc, settings, f_cart, f_tip, nz, kp, kx, forces, st)
             if st == 0:  # record and summarise time t; a run ends at the scenario's end or at a trip
                 for l in range(n_hist):
                     if alive[l] and (n % stride == 0 or n == n_steps or tripped[l]):

@@ -94,13 +94,15 @@ def circuit(X, Z, s_ref, nz, sensors, wiring, drift, sat, clip, sig, raw, dz, st
 
 
 @nb.njit(**_JIT)
-def drive(X, XA, sig, out_index, tripped, pc, settings, f_cart, f_tip, kp, kx, forces, st):
+def drive(X, XA, sig, out_index, tripped, pc, settings, f_cart, f_tip, nz, kp, kx, forces, st):
     """Actuator (dead zone, model, force limit; off once tripped) and plant slopes per lane,
     into kp[st], kx[st], forces[st]. settings: patchgen.bench.kernel's Settings (the actuator's
     model ACT_*, K_U, tau, dead zone, force limit); X (plant state), XA (actuator state) and pc
-    (plant_coefficients) are per lane."""
+    (plant_coefficients) are per lane. f_cart and f_tip are the scenario's pushes (N); the last
+    two rows of nz, the bench's random forces on the cart and at the tip (N), per lane."""
     act, K_U, tau, dz, flim = settings.actuator, settings.K_U, settings.tau, settings.dead_zone, settings.force_limit
     inv_tau = 1.0 / tau
+    fc, ft = nz.shape[0] - 2, nz.shape[0] - 1
     ku_tau = K_U / tau
     for l in range(XA.shape[0]):
         u = sig[out_index, l]
@@ -117,7 +119,7 @@ def drive(X, XA, sig, out_index, tripped, pc, settings, f_cart, f_tip, kp, kx, f
             force = 0.0
         sd, thd = X[2, l], X[3, l]
         sn, cs = sincos(X[1, l])
-        sdd, thdd = plant_accel(pc, l, sn, cs, sd, thd, force + f_cart, f_tip)
+        sdd, thdd = plant_accel(pc, l, sn, cs, sd, thd, force + (f_cart + nz[fc, l]), f_tip + nz[ft, l])
         kp[st, 0, l], kp[st, 1, l], kp[st, 2, l], kp[st, 3, l] = sd, thd, sdd, thdd
         kx[st, l] = dx
         forces[st, l] = force

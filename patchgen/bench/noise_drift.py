@@ -1,8 +1,9 @@
-"""The noise and drift of one run, resolved once from the scenario and the profiles.
+"""The noise, random forces and drift of one run, resolved once from the scenario and the profiles.
 
-patchgen's simulator and the SPICE deck both read a run's noise levels and integrator drift from
-here, so a scenario asks the same of both: the profiles' levels, none, or its own explicit levels
-and drift rate. ``ideal`` turns both off, as ``patchgen simulate --ideal`` does.
+patchgen's simulator and the SPICE deck both read a run's noise levels, the bench's random forces
+on the plant and the integrator drift from here, so a scenario asks the same of both: the
+profiles' levels, none, or its own explicit levels and drift rate. ``ideal`` turns all of them
+off, as ``patchgen simulate --ideal`` does.
 """
 
 from __future__ import annotations
@@ -18,18 +19,23 @@ from patchgen.profiles.machine import MachineProfile
 @dataclass(frozen=True)
 class NoiseAndDrift:
     """Noise in V rms on each sensor (by id) and on every amplifier's output, with their
-    bandwidths, and the drift rate of every integrating amplifier (integrators and lags) in V/s."""
+    bandwidths; random forces on the cart and at the pendulum's tip in N rms, with theirs; and
+    the drift rate of every integrating amplifier (integrators and lags) in V/s."""
 
     sensor_V_rms: dict[str, float] = field(default_factory=dict)
     sensor_bandwidth_Hz: float = 0.0
     amplifier_V_rms: float = 0.0
     amplifier_bandwidth_Hz: float = 0.0
     drift_V_per_s: float = 0.0
+    cart_force_N_rms: float = 0.0
+    tip_force_N_rms: float = 0.0
+    force_bandwidth_Hz: float = 0.0
 
     @property
     def noisy(self) -> bool:
-        """True when any sensor or amplifier has noise."""
-        return self.amplifier_V_rms > 0 or any(v > 0 for v in self.sensor_V_rms.values())
+        """True when any sensor or amplifier has noise, or the plant a random force."""
+        return (self.amplifier_V_rms > 0 or any(v > 0 for v in self.sensor_V_rms.values())
+                or self.cart_force_N_rms > 0 or self.tip_force_N_rms > 0)
 
 
 def noise_and_drift(sensor_ids: Sequence[str], bench: BenchProfile, machine: MachineProfile,
@@ -41,31 +47,35 @@ def noise_and_drift(sensor_ids: Sequence[str], bench: BenchProfile, machine: Mac
     sensor_ids : sequence of str
         The netlist's sensors.
     bench, machine : BenchProfile, MachineProfile
-        The sensors' noise (bench) and the amplifiers' noise and drift (machine), for mode
-        "profile"; the bandwidths always come from them.
+        The sensors' noise and the random forces (bench) and the amplifiers' noise and drift
+        (machine), for mode "profile"; the bandwidths always come from them.
     scenario : Scenario
-        Its ``noise`` (profile, off or explicit levels) and ``drift`` (profile, off or V/s).
+        Its ``noise`` (profile, off or explicit levels, forces included) and ``drift``
+        (profile, off or V/s).
     ideal : bool
-        No noise and no drift, whatever the scenario says.
+        No noise, no random force and no drift, whatever the scenario says.
 
     Returns
     -------
     NoiseAndDrift
         Every sensor named, with 0.0 where it has no noise.
     """
-    sens, imp = bench.sensors, machine.imperfections
+    sens, imp, dist = bench.sensors, machine.imperfections, bench.disturbance
     if ideal or scenario.noise.mode == "off":
-        sensor_rms, amp_rms = {s: 0.0 for s in sensor_ids}, 0.0
+        sensor_rms, amp_rms, forces = {s: 0.0 for s in sensor_ids}, 0.0, (0.0, 0.0)
     elif scenario.noise.mode == "explicit":
         sensor_rms = {s: scenario.noise.level(s) for s in sensor_ids}
         amp_rms = scenario.noise.level("amplifier")
+        forces = (scenario.noise.level("cart_force_N"), scenario.noise.level("tip_force_N"))
     else:
         sensor_rms = {s: float(sens.noise_V_rms.get(s, 0.0)) for s in sensor_ids}
         amp_rms = imp.amplifier_noise_V_rms
+        forces = (dist.cart_force_N_rms, dist.tip_force_N_rms)
     if ideal or scenario.drift == "off":
         drift = 0.0
     elif scenario.drift == "profile":
         drift = machine.integrator_drift_V_per_s()
     else:
         drift = float(scenario.drift)
-    return NoiseAndDrift(sensor_rms, sens.noise_bandwidth_Hz, amp_rms, imp.noise_bandwidth_Hz, drift)
+    return NoiseAndDrift(sensor_rms, sens.noise_bandwidth_Hz, amp_rms, imp.noise_bandwidth_Hz, drift,
+                         float(forces[0]), float(forces[1]), dist.bandwidth_Hz)

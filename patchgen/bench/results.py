@@ -14,7 +14,8 @@ from patchgen.inputs.scenario import Scenario
 PERCENTILES = (5, 50, 95)
 
 IDEAL_MEANING = (
-    "no sensor or amplifier noise, no integrator drift, no saturation (overloads still recorded), "
+    "no sensor or amplifier noise, no random force on the plant, no integrator drift, no saturation "
+    "(overloads still recorded), "
     "actuator a pure gain K_U; kept: nonlinear plant, pot settings as dialled, weights and "
     "inversions, differentiator roll-off as wired, limit switches, disturbances")
 
@@ -76,6 +77,9 @@ class SimSettings:
     amplifier_noise_V_rms: float
     amplifier_noise_bandwidth_Hz: float
     integrator_drift_V_per_s: float
+    cart_force_N_rms: float  # the bench's random force on the cart
+    tip_force_N_rms: float  # and at the pendulum's tip
+    force_bandwidth_Hz: float
     saturation_V: float
     saturation_clipped: bool
     actuator: str

@@ -87,6 +87,7 @@ class Disturbance(InputModel):
         return v
 
 
+FORCE_LEVEL_MAX_N = 1e3  # an explicit random force's rms: as a bench profile's bound
 Level = Annotated[Real, Field(ge=0, le=LEVEL_MAX_V)]
 
 
@@ -99,9 +100,11 @@ class NoiseLevels(InputModel):
     theta: Level | None = None
     s_dot: Level | None = None
     amplifier: Level | None = None
+    cart_force_N: Annotated[Real, Field(ge=0, le=FORCE_LEVEL_MAX_N)] | None = None  # N rms
+    tip_force_N: Annotated[Real, Field(ge=0, le=FORCE_LEVEL_MAX_N)] | None = None  # N rms
 
     def level(self, name: str) -> float:
-        """An explicit level in V rms (one left out is zero)."""
+        """An explicit level, V rms (forces: N rms); one left out is zero."""
         return getattr(self, name, None) or 0.0
 
 

@@ -104,6 +104,20 @@ def _noise_table(d: DeckLines, duration_s: float) -> tuple[str, float]:
     return "\n".join(rows) + "\n", dt
 
 
+def _random_forces(d: DeckLines, push: dict[str, str], settings: SpiceSettings) -> dict[str, str]:
+    """The bench's random forces on the cart and at the tip (patchgen.bench.noise_drift), as noise
+    sources added to the scenario's pushes."""
+    levels = settings.noise_and_drift
+    out = dict(push)
+    for key, rms in (("cart", levels.cart_force_N_rms), ("tip", levels.tip_force_N_rms)):
+        if rms > 0:
+            d.comment(f"Random force on the {key}: {rms:g} N rms to {levels.force_bandwidth_Hz:g} Hz")
+            _noise_source(d, f"E_force_{key}_noise", f"fz_{key}", "0", rms, levels.force_bandwidth_Hz,
+                          settings.duration_s)
+            out[key] = "+".join(p for p in (push[key], f"v(fz_{key})") if p)
+    return out
+
+
 def _sensors(d: DeckLines, net: Netlist, bench: BenchProfile, machine: MachineProfile,
              settings: SpiceSettings) -> None:
     """Sensor voltage = bench sensor constant x state, limited (smoothly) at the machine reference:
@@ -288,7 +302,7 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     d.comment(f"Control voltage u_c = output of {reading.output}")
     d.add(f"V_uc {CONTROL_NODE} {_source_node(reading, reading.output)} DC 0")
     actuator(d, plant, bench, settings.actuator == "ideal")
-    cart_pendulum(d, plant, settings.x0, disturbances(d, settings.disturbances))
+    cart_pendulum(d, plant, settings.x0, _random_forces(d, disturbances(d, settings.disturbances), settings))
 
     max_step = settings.max_step_s or settings.step_s
     files: dict[str, str] = {}

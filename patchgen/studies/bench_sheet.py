@@ -50,8 +50,11 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
 
     plant = plant_params(d.spec)
     header, rows = prediction_rows(predict(net, plant, bench, machine, runs_hold=runs_hold, done=done))
+    dist = bench.disturbance
     note = (f"From this netlist on the {bench.id} bench: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
-            f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; drift "
+            f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; random "
+            f"forces {dist.cart_force_N_rms:g} N rms on the cart and {dist.tip_force_N_rms:g} "
+            f"N rms at the tip (to {dist.bandwidth_Hz:g} Hz); drift "
             f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s ({machine.imperfections.drift_source}); "
             f"rails +/-{machine.imperfections.saturation_V:g} V; switches at +/-{d.spec.plant.d / 2:g} m. "
             + diagnosis_note(net, plant, bench))

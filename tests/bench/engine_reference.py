@@ -1,5 +1,6 @@
 """The engine as it was before runs went side by side: one run per call, a scalar loop, fast-math.
-Kept verbatim (apart from taking its normals as float64 and this header) as the reference the
+Kept verbatim (apart from taking its normals as float64, the bench's random forces on the plant and
+this header) as the reference the
 blocked kernel (patchgen.bench.kernel) is checked against, run for run, on the same noise streams."""
 
 import math
@@ -23,7 +24,7 @@ def reference_runs(cfg: EngineConfig, draws: Draws, n_history: int = 1):
     st, sensors, noise, w, dist = cfg.records
     runs, n_amp = signs.shape
     ns = len(sensors.state)
-    nch = ns + n_amp
+    nch = ns + n_amp + 2  # the voltages, then the random forces on the cart and at the tip
     noisy = bool(noise.std.any())
     n_samples = st.steps // st.stride + 2
     out = {"trip_time": np.full(runs, np.nan), "fall_time": np.full(runs, np.nan),
@@ -39,7 +40,8 @@ def reference_runs(cfg: EngineConfig, draws: Draws, n_history: int = 1):
         _one_run(r, signs[r], gauss, st.dt, st.steps, st.stride, st.x0, plants[r],
                  st.limit_switches, sensors.state, sensors.gain, noise.a[:ns], noise.std[:ns],
                  w.kind, w.in_ptr, w.in_src, w.in_gain, w.param1, w.param2, w.ic, w.drift,
-                 noise.a[ns:], noise.std[ns:], st.saturation, st.clip, st.output, st.actuator,
+                 noise.a[ns:ns + n_amp], noise.std[ns:ns + n_amp], noise.a[ns + n_amp:],
+                 noise.std[ns + n_amp:], st.saturation, st.clip, st.output, st.actuator,
                  st.K_U, st.tau, st.dead_zone, st.force_limit, dist.kind, dist.t0, dist.t1,
                  dist.value, st.fall_angle, out["trip_time"], out["fall_time"], out["max_abs_theta"],
                  out["max_abs_s"], out["rms_theta"], out["max_abs_u_c"], out["max_abs_force"],
@@ -121,7 +123,7 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
 @nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
              sensor_state, sensor_gain, sna, sns,
-             amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, sat, clip,
+             amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, fna, fns, sat, clip,
              out_index, act, K_U, tau, dz, flim,
              dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
              trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final,
@@ -133,11 +135,14 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
     drift = drift_mag * sign  # each integrating amplifier drifts one way, drawn per run
     nz_s = np.zeros(ns)
     nz_a = np.zeros(na)
+    nz_f = np.zeros(2)  # random force on the cart, at the tip
     if noisy:  # start the noise in its stationary distribution
         for i in range(ns):
             nz_s[i] = gauss[0, i] * sns[i] / math.sqrt(1.0 - sna[i] * sna[i])
         for j in range(na):
             nz_a[j] = gauss[0, ns + j] * ans[j] / math.sqrt(1.0 - ana[j] * ana[j])
+        for k in range(2):
+            nz_f[k] = gauss[0, ns + na + k] * fns[k] / math.sqrt(1.0 - fna[k] * fna[k])
     xp = x0.copy()
     za = ic.copy()
     sig = np.zeros(ns + na)
@@ -175,6 +180,8 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
                 nz_s[i] = sna[i] * nz_s[i] + sns[i] * gauss[n, i]
             for j in range(na):
                 nz_a[j] = ana[j] * nz_a[j] + ans[j] * gauss[n, ns + j]
+            for k in range(2):
+                nz_f[k] = fna[k] * nz_f[k] + fns[k] * gauss[n, ns + na + k]
         # disturbances averaged over the step (so an impulse keeps its area at any step)
         f_cart = 0.0
         f_tip = 0.0
@@ -228,7 +235,8 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
                 force = -flim
             if tripped:
                 force = 0.0
-            d0, d1, d2, d3 = plant_rhs(p, xt[1], xt[2], xt[3], force + f_cart, f_tip)
+            d0, d1, d2, d3 = plant_rhs(p, xt[1], xt[2], xt[3], force + (f_cart + nz_f[0]),
+                                     f_tip + nz_f[1])
             kp[st, 0] = d0
             kp[st, 1] = d1
             kp[st, 2] = d2

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -89,3 +90,48 @@ def test_profile_levels_are_the_profiles():
     assert levels.amplifier_V_rms == GP6.imperfections.amplifier_noise_V_rms
     assert levels.drift_V_per_s == GP6.integrator_drift_V_per_s()
     assert levels.sensor_bandwidth_Hz == UW.sensors.noise_bandwidth_Hz
+
+
+def test_random_forces_are_the_bench_profiles_and_reach_the_engine():
+    """The bench's random forces on the plant (uw-1991.toml: 0.1 N on the cart, 0.01 N at the tip,
+    to 5 Hz) are on with the profiles' noise, as two more noise channels of the engine."""
+    from patchgen.bench.engine import noise_process
+
+    scenario = Scenario(duration_s=1.0)
+    levels = noise_and_drift(["s", "theta", "s_dot"], UW, GP6, scenario)
+    assert (levels.cart_force_N_rms, levels.tip_force_N_rms, levels.force_bandwidth_Hz) == (0.1, 0.01, 5.0)
+    assert levels.noisy
+    circuit = compile_circuit(_net(), GP6, UW)
+    cfg, sim = engine_config(circuit, PLANT, UW, GP6, scenario)
+    n_v = len(circuit.sensor_ids) + circuit.n_amps
+    assert cfg.noise.a.shape == (n_v + 2,)
+    for k, rms in enumerate((0.1, 0.01)):
+        a, std = noise_process(rms, 5.0, cfg.settings.dt)
+        assert cfg.noise.a[n_v + k] == pytest.approx(a, rel=1e-12)
+        assert cfg.noise.std[n_v + k] == pytest.approx(std, rel=1e-12)
+        assert std / math.sqrt(1 - a * a) == pytest.approx(rms, rel=1e-12)  # stationary rms
+    assert (sim.cart_force_N_rms, sim.tip_force_N_rms) == (0.1, 0.01)
+
+
+def test_explicit_forces_and_quiet_modes():
+    explicit = Scenario(duration_s=1.0, noise={"mode": "explicit", "cart_force_N": 0.3})
+    levels = noise_and_drift(["s"], UW, GP6, explicit)
+    assert (levels.cart_force_N_rms, levels.tip_force_N_rms) == (0.3, 0.0)
+    for scenario, ideal in ((Scenario(duration_s=1.0), True), (Scenario(duration_s=1.0, noise="off"), False)):
+        levels = noise_and_drift(["s"], UW, GP6, scenario, ideal)
+        assert levels.cart_force_N_rms == levels.tip_force_N_rms == 0.0
+
+
+def test_a_pendulum_the_patch_does_not_hold_falls_on_the_bench():
+    """With the actuator all but cut (K_U at its 0.01 N/V floor), a pendulum released exactly upright
+    with no push stays up only when nothing at all disturbs it: the bench's random forces topple it
+    in every seed."""
+    from patchgen.bench.simulate import simulate
+
+    dead = UW.model_copy(update={"actuator": UW.actuator.model_copy(update={"K_U": 0.01})})
+    quiet = Scenario(duration_s=20.0, noise="off", drift="off")
+    still = simulate(_net(), PLANT, dead, GP6, quiet, seed=1, runs=1)
+    assert still.runs[0].held and still.runs[0].max_abs_theta_deg == 0.0
+    pushed_by_the_bench = Scenario(duration_s=20.0, noise="profile", drift="off")
+    res = simulate(_net(), PLANT, dead, GP6, pushed_by_the_bench, seed=1, runs=32, keep_history=False)
+    assert not any(r.held for r in res.runs)

@@ -210,17 +210,24 @@ def test_noise_and_drift_switch_their_sources(net, gp6, bench):
     assert "E_sens_theta_noise sens_theta sens_theta_clean nz_1 0 1" in text
     assert "a_lag" in text and "ln(1+exp(" in text  # bench lag and smoothed dead zone
     assert "V_a5_offset" not in text  # drift belongs to integrators
-    # The noise table: sensors s, theta, s_dot then amplifiers A1, A5, A6, A7, at the finest
-    # sample step (1 kHz amplifier noise -> 0.5 ms), with each column's rms as its profile says.
+    # The bench's random forces on the cart and at the tip join the scenario's pushes
+    assert "E_force_cart_noise fz_cart 0 nz_7 0 1" in text and "E_force_tip_noise fz_tip 0 nz_8 0 1" in text
+    assert "v(f_cart) + v(fz_cart)" in text and "(v(fz_tip))*cos(" in text
+    # The noise table: sensors s, theta, s_dot, amplifiers A1, A5, A6, A7, then the two forces, at
+    # the finest sample step (1 kHz amplifier noise -> 0.5 ms), each column's rms as its profile says.
     table = np.loadtxt(deck.files["patch.noise"].splitlines())
-    assert table.shape == (20001, 8)
+    assert table.shape == (20001, 10)
     assert np.diff(table[:, 0]) == pytest.approx(0.0005)
     rms = table[:, 1:].std(axis=0)
-    expected = [0.002, 0.002, 0.005] + [gp6.imperfections.amplifier_noise_V_rms] * 4  # uw-1991.toml
-    # Sensor columns are 200 Hz samples joined linearly onto the finer grid: their rms drops to
-    # sqrt(2/3) of the sample rms (mean square of a linear blend of two independent samples).
-    expected = [e * math.sqrt(2 / 3) for e in expected[:3]] + expected[3:]
-    assert rms == pytest.approx(expected, rel=0.05)
+    expected = [0.002, 0.002, 0.005] + [gp6.imperfections.amplifier_noise_V_rms] * 4 + [0.1, 0.01]  # uw-1991.toml
+    # Sensor and force columns are 200 Hz and 10 Hz samples joined linearly onto the finer grid:
+    # their rms drops to sqrt(2/3) of the sample rms (mean square of a linear blend of two
+    # independent samples).
+    blend = math.sqrt(2 / 3)
+    expected = [e * blend for e in expected[:3]] + expected[3:7] + [e * blend for e in expected[7:]]
+    assert rms[:7] == pytest.approx(expected[:7], rel=0.05)
+    # the forces have 101 independent samples in 10 s: the sample rms is within 25 % (3.5 sigma)
+    assert rms[7:] == pytest.approx(expected[7:], rel=0.25)
 
 
 def test_deck_is_deterministic(net, gp6, bench):

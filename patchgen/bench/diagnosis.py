@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from patchgen.bench.circuit import sensor_constants
+from patchgen.design.margins import Margins, loop_margins
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import wired_law
 from patchgen.plant.equations import PlantParams, linear_matrices
@@ -91,15 +92,10 @@ def linear_loop(net: Netlist, plant: PlantParams, bench: BenchProfile, tau: floa
     (numpy.ndarray, list of str)
         The closed loop's A and its states' names (plant, actuator if any, then the wired states).
     """
-    law = wired_law(net)
+    law, ks = _wired(net, bench)
     Ap, Bp = linear_matrices(plant)
     K_U = bench.actuator.K_U
-    ks = np.zeros((len(law.inputs), 4))
     names = ["s", "theta", "s_dot", "theta_dot"]
-    gains = dict(zip((s.id for s in net.sensors), sensor_constants(net, bench)))
-    for r, sid in enumerate(law.inputs):
-        sensor = next(s for s in net.sensors if s.id == sid)
-        ks[r, names.index(sensor.quantity)] = gains[sid]
     nc = law.Ac.shape[0]
     # u_c = Cc xc + Dc ks x
     if tau is None:
@@ -118,6 +114,59 @@ def linear_loop(net: Netlist, plant: PlantParams, bench: BenchProfile, tau: floa
         A[5:, :4] = law.Bc @ ks
         A[5:, 5:] = law.Ac
     return A, names + ([] if tau is None else ["actuator"]) + list(law.states)
+
+
+def bench_margins(net: Netlist, plant: PlantParams, bench: BenchProfile) -> Margins:
+    """Gain and phase margins of the wired loop on the bench, broken at the command voltage u_c.
+
+    The loop as the bench closes it, linearised about upright: plant, the bench's actuator (its
+    lag when it has one; the dead zone and limits are not linear), the controller read back from
+    the netlist with its pots as dialled. Broken where the patch's output drives the actuator, it
+    is L(s) = -u_c(s)/w(s) for a command w into the actuator, closed as w = -k L w
+    (patchgen.design.margins.loop_margins), so k = 1 is the loop as wired.
+
+    Parameters
+    ----------
+    net, plant, bench : Netlist, PlantParams, BenchProfile
+        The patch, the plant and the bench (K_U, tau, sensor constants).
+
+    Returns
+    -------
+    Margins
+        Lower and upper gain limits, phase and delay margins of the wired loop.
+    """
+    act = bench.actuator
+    tau = act.tau if act.model != "gain" and act.tau > 0 else None
+    law, ks = _wired(net, bench)
+    Ap, Bp = linear_matrices(plant)
+    nc, na = law.Ac.shape[0], 0 if tau is None else 1
+    n = 4 + na + nc
+    A, B, C = np.zeros((n, n)), np.zeros((n, 1)), np.zeros((1, n))
+    A[:4, :4] = Ap
+    A[4 + na:, :4] = law.Bc @ ks
+    A[4 + na:, 4 + na:] = law.Ac
+    if tau is None:
+        B[:4] = Bp * act.K_U
+    else:
+        A[:4, 4:5] = Bp
+        A[4, 4] = -1.0 / tau
+        B[4, 0] = act.K_U / tau
+    C[0, :4] = (law.Dc @ ks)[0]
+    C[0, 4 + na:] = law.Cc[0]
+    return loop_margins(A, B, -C, 0.0)
+
+
+def _wired(net: Netlist, bench: BenchProfile):
+    """The controller as wired (patchgen.patch.readback.wired_law) and the map ks from the plant
+    state to its inputs' volts (the bench's sensor constants): u_c = Cc xc + Dc ks x."""
+    law = wired_law(net)
+    names = ["s", "theta", "s_dot", "theta_dot"]
+    gains = dict(zip((s.id for s in net.sensors), sensor_constants(net, bench)))
+    ks = np.zeros((len(law.inputs), 4))
+    for r, sid in enumerate(law.inputs):
+        sensor = next(s for s in net.sensors if s.id == sid)
+        ks[r, names.index(sensor.quantity)] = gains[sid]
+    return law, ks
 
 
 def loop_poles(A: np.ndarray, names: list[str], actuator: str) -> LoopPoles:

@@ -123,7 +123,7 @@ class SimResult:
         }
 
 
-def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...]) -> list[RunSummary]:
+def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run: int = 0) -> list[RunSummary]:
     """Each run's summary, from the engine's batches in run order.
 
     Parameters
@@ -132,11 +132,13 @@ def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...]) -> list[Ru
         The batches, the first run first.
     amp_ids : tuple of str
         The amplifiers in evaluation order (the engine's columns).
+    first_run : int
+        The first run's number.
 
     Returns
     -------
     list of RunSummary
-        One per run, numbered from 0.
+        One per run, numbered from ``first_run``.
     """
     def cat(name: str) -> np.ndarray:
         return np.concatenate([getattr(p, name) for p in parts])
@@ -147,7 +149,7 @@ def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...]) -> list[Ru
     max_uc, max_f, final = cat("max_abs_u_c"), cat("max_abs_force"), cat("final_state")
     return [
         RunSummary(
-            run=i,
+            run=first_run + i,
             held=bool(np.isnan(trip[i]) and np.isnan(fall[i])),
             limit_switch_tripped=bool(not np.isnan(trip[i])), trip_time_s=_opt(trip[i]),
             fallen=bool(not np.isnan(fall[i])), fall_time_s=_opt(fall[i]),

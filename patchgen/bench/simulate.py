@@ -48,11 +48,12 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
              scenario: Scenario, *, seed: int | None = None, runs: int = 1, ideal: bool = False,
              keep_history: bool = True,
              progress: Callable[[int], None] | None = None,
-             spread: dict[str, float] | None = None) -> SimResult:
+             spread: dict[str, float] | None = None, first_run: int = 0) -> SimResult:
     """Simulate ``runs`` runs of the scenario (seed from the argument, else the scenario's).
 
     Run i draws from ``numpy.random.default_rng([seed, i])`` (drift signs, the key of its
-    counter-based noise, its plant), so run 0 of a Monte Carlo is the single run of the same seed.
+    counter-based noise, its plant), so run 0 of a Monte Carlo is the single run of the same seed,
+    and a Monte Carlo may be continued: ``first_run`` = k runs i = k, k + 1, ...
 
     Parameters
     ----------
@@ -77,6 +78,8 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     spread : dict of str to float, optional
         E.g. {"M": 0.1, "l": 0.1}: each run draws these plant parameters uniformly within those
         fractions of the nominal, so the Monte Carlo covers model error as well as noise.
+    first_run : int
+        The index of the first run (its draws, see above); the history is that run's.
 
     Returns
     -------
@@ -89,6 +92,8 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     base_seed = scenario.seed if seed is None else seed
     if not 0 <= base_seed < 2**63:
         raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")
+    if first_run < 0:
+        raise ValueError(f"first_run must be at least 0 (got {first_run})")
     cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal, spread=spread)
     budget.check(scenario, runs, step=cfg.settings.dt, stride=cfg.settings.stride, history=keep_history,
                  usual_step=default_step([], ideal))
@@ -99,12 +104,12 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     parts = []
     for start in range(0, runs, chunk):
         stop = min(start + chunk, runs)
-        draws = draw_batch(cfg, [np.random.default_rng([base_seed, i]) for i in range(start, stop)])
+        draws = draw_batch(cfg, [np.random.default_rng([base_seed, first_run + i]) for i in range(start, stop)])
         parts.append(run_batch(cfg, draws, 1 if keep_history and start == 0 else 0))
         if progress is not None:
             progress(stop)
 
-    summaries = run_summaries(parts, circuit.amp_ids)
+    summaries = run_summaries(parts, circuit.amp_ids, first_run)
     history = None
     if keep_history:
         h = parts[0].history[0, :parts[0].history_length[0]]

@@ -28,7 +28,7 @@ SUMMARIES = {
     "simulate": "Simulate SPEC's patched circuit (built from its netlist) on the bench.",
     "spice": "Export SPEC's patch and the bench as an ngspice deck, run it, and compare with patchgen's own "
              "simulation of the same scenario.",
-    "recommend": "Design, allocate and simulate each realisation of SPEC's estimator; write the best patch.",
+    "recommend": "Run every realisation of SPEC on the bench in every scenario; write the best patch and its spec.",
     "swingup": "Pump SPEC's pendulum up from hanging at rest, hand it to the patched controller when the state "
                "enters the zone of the linear design, and hold it on the bench (actuator lag and dead zone, "
                "noise, drift).",

@@ -6,35 +6,42 @@ from __future__ import annotations
 import json
 import math
 
+from patchgen.bench.prediction import STANDARD
 from patchgen.inputs.scenario import load_scenario
+from patchgen.inputs.spec_file import spec_toml
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.render.sheet import SheetSection
 from patchgen.studies.bench_sheet import predicted_patch_files
-from patchgen.studies.recommend import Recommendation
+from patchgen.studies.ranking import ROUND_RUNS, TARGET
+from patchgen.studies.recommend import Candidate, Recommendation, chosen_spec
 
-SHEET_HOLD = "hold-120s"  # the sheet's long hold (patchgen.bench.prediction.STANDARD)
+RECOMMENDED_SPEC = "recommended.toml"
 
 
 def table_rows(rec: Recommendation) -> list[dict]:
     """One plain row per candidate, ranked (for the terminal, the sheet and --json)."""
     rows = []
     for i, c in enumerate(rec.ranked, 1):
-        m = c.design.lqg_margins if c.design is not None else None
+        m = c.margins
+        w = c.weakest
         rows.append({
-            "rank": i if c.fraction_ok is not None else None,
+            "rank": i if c.simulated else None,
             "realisation": c.label,
             "estimator": c.estimator_detail,
+            "bench_loop": c.bench_loop,
+            "bench_loop_detail": c.bench_loop_line,
+            "decision": c.decision,
             "fraction_ok": c.fraction_ok,
-            "fraction_fallen": c.fraction_fallen,
-            "fraction_tripped": c.fraction_tripped,
-            "fraction_overloaded": c.fraction_overloaded,
+            "weakest_scenario": None if w is None else w.scenario,
+            "interval_95": None if w is None else list(w.interval),
+            "scenarios": [o.as_dict() for o in c.outcomes],
+            "runs": c.runs,
             "lower_gm_db": None if m is None or not m.stable else m.lower_gm_db,
             "upper_gm_db": None if m is None or not m.stable else m.upper_gm_db,
             "pm_deg": c.pm_deg,
-            "loop_stable": None if m is None else m.stable,
-            "bench_loop": c.bench_loop,
             "worst_swing_V": c.worst_swing_V,
+            "units": None if c.netlist is None else c.netlist.units,
             "amplifiers": c.amplifiers,
             "pots": c.pots,
             "error": c.error,
@@ -48,42 +55,80 @@ def fmt_figure(x: float | None, fmt: str, none: str = "-") -> str:
 
 
 def gm_cell(row: dict, sep: str = " / ") -> str:
-    """A row's gain limits, lower then upper, dB ("none" and "inf" when there is no limit)."""
+    """A row's gain limits on the bench, lower then upper, dB ("none" and "inf" when there is no
+    limit; "-" when the wired loop is not stable)."""
+    if row["pm_deg"] is None and row["lower_gm_db"] is None and row["upper_gm_db"] is None:
+        return "-"
     return f"{fmt_figure(row['lower_gm_db'], '{:+.1f}', 'none')}{sep}{fmt_figure(row['upper_gm_db'], '{:+.1f}', 'inf')}"
 
 
-def outcome_cells(row: dict) -> list[str]:
-    """A simulated row's fractions of runs held, fallen, tripped and overloaded, in percent."""
-    return [f"{row[k]:.1%}" for k in ("fraction_ok", "fraction_fallen", "fraction_tripped", "fraction_overloaded")]
+def held_cell(row: dict) -> str:
+    """The weakest scenario's held fraction, its 95 % interval and the scenario."""
+    lo, hi = row["interval_95"]
+    return f"{row['fraction_ok']:.1%} [{lo:.1%}, {hi:.1%}] {row['weakest_scenario']}"
+
+
+def _verdict_words(row: dict) -> str:
+    return {"holds": "holds", "fails": "fails", "undecided": "undecided"}[row["decision"]]
+
+
+def method_text(rec: Recommendation) -> str:
+    """How the candidates were judged, in a paragraph."""
+    names = ", ".join(f"{sc.name} (seed {rec.seed_of(sc)})" for sc in rec.scenarios)
+    return (f"Each realisation that fits the machine was designed, allocated and run on the bench (actuator lag, dead "
+            f"zone and limit, sensor noise, random forces on the plant, integrator drift) in every scenario: {names}. "
+            f"'held' counts runs where the pendulum stayed up, the cart inside the limit switches and every amplifier "
+            f"inside the rails for the whole scenario; the table gives the weakest scenario, with its 95 % Wilson "
+            f"interval. Runs went in rounds of {ROUND_RUNS} per scenario, up to {rec.max_runs}: a realisation stopped "
+            f"once every scenario's interval was above {TARGET:.0%} (holds) or one was below it (fails). A wired loop "
+            f"that is not stable on the bench (linearised with its actuator lag and pots as dialled) ranks below every "
+            f"stable one and is never chosen; then by holds / undecided / fails, the weakest held fraction (when not "
+            f"clearly holding), the wired loop's gain margin on the bench (nearer limit), its phase margin, then "
+            f"hardware (units, amplifiers, pots).")
+
+
+def verdict_text(rec: Recommendation) -> str:
+    """One sentence: what was chosen, or why nothing was."""
+    best = rec.best
+    if best is not None:
+        w = best.weakest
+        return (f"Chosen: {best.label}: wired loop stable on the bench, held in {w.fraction:.1%} of the runs of its "
+                f"weakest scenario ({w.scenario}, {w.held} of {w.runs}).")
+    stable = [c for c in rec.ranked if c.simulated and c.bench_loop == "stable"]
+    if not stable:
+        return ("None chosen: no realisation that fits the machine has a wired loop stable on the bench ("
+                + "; ".join(f"{c.label}: {c.bench_loop}" for c in rec.ranked if c.simulated)
+                + "). Design with the bench's actuator and weights that answer its dead zone, as the shipped "
+                "design bench-recommended does.")
+    b = stable[0]
+    w = b.weakest
+    return (f"None chosen: the best realisation with a loop stable on the bench, {b.label}, held in only "
+            f"{w.fraction:.1%} of the runs of {w.scenario} (at least {TARGET:.0%} of every scenario is needed).")
 
 
 def table_markdown(rec: Recommendation, reference_V: float) -> str:
     """The comparison as a Markdown section body: why the first row was chosen."""
-    head = ("| rank | realisation | estimator | held (of runs) | fallen | tripped | overloaded | "
-            "GM lower / upper (dB) | PM (deg) | worst swing (V) | amps / pots |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|\n")
+    head = ("| rank | realisation | estimator | wired loop on the bench | verdict | held (weakest scenario, 95 % "
+            "interval) | GM lower / upper (dB) | PM (deg) | worst swing (V) | units / amps / pots |\n"
+            "|---|---|---|---|---|---|---|---|---|---|\n")
     lines = []
     for r in table_rows(rec):
         if r["error"]:
-            lines.append(f"| - | {r['realisation']} | {r['estimator']} | not simulated: {r['error']} "
-                         "| | | | | | | |")
+            lines.append(f"| - | {r['realisation']} | {r['estimator']} | | not simulated: {r['error']} | | | | | |")
             continue
         lines.append(
-            f"| {r['rank']} | {r['realisation']} | {r['estimator']} | {' | '.join(outcome_cells(r))} | {gm_cell(r)} | "
-            f"{fmt_figure(r['pm_deg'], '{:.1f}')} | {r['worst_swing_V']:.2f} of {reference_V:g} | "
-            f"{r['amplifiers']} / {r['pots']} |")
-    best = rec.best
-    intro = (f"Each way of getting theta_dot (and the actuator state) that fits the machine was designed, "
-             f"allocated and simulated on the bench ({rec.scenario.name}: {rec.scenario.description}), "
-             f"{rec.runs} noise seeds from seed {rec.seed}, with the bench actuator, sensor noise and "
-             "integrator drift. 'held' counts runs where the pendulum stayed up, the cart stayed inside "
-             "the limit switches and no amplifier left the rails for the whole scenario. A wired loop that is "
-             "not stable on the bench (linearised with its actuator lag) ranks below every stable one and is "
-             "never chosen; then ranked by runs held, the loop's gain margin (nearer limit), phase margin, "
-             "and worst amplifier swing.\n\n")
-    tail = (f"\nChosen: **{best.label}**.\n" if best else
-            "\nNone chosen: no candidate's wired loop is stable on the bench.\n")
-    return intro + head + "\n".join(lines) + "\n" + tail
+            f"| {r['rank']} | {r['realisation']} | {r['estimator']} | {r['bench_loop']} | {_verdict_words(r)} | "
+            f"{held_cell(r)} | {gm_cell(r)} | {fmt_figure(r['pm_deg'], '{:.1f}')} | "
+            f"{r['worst_swing_V']:.2f} of {reference_V:g} | {r['units']} / {r['amplifiers']} / {r['pots']} |")
+    names = [sc.name for sc in rec.scenarios]
+    per = ("\n\nHeld per scenario (runs held of runs simulated):\n\n| realisation | " + " | ".join(names) + " |\n|---|"
+           + "---|" * len(names) + "\n")
+    for c in rec.ranked:
+        if c.simulated:
+            per += f"| {c.label} | " + " | ".join(f"{o.held} / {o.runs}" for o in c.outcomes) + " |\n"
+    loops = "\n".join(f"- {c.label}: {c.bench_loop_line}" for c in rec.ranked if c.bench_loop_line)
+    return (method_text(rec) + "\n\n" + head + "\n".join(lines) + per + "\nLinearised on the bench:\n\n" + loops
+            + f"\n\n**{verdict_text(rec)}**\n")
 
 
 def why_section(rec: Recommendation, reference_V: float) -> SheetSection:
@@ -101,36 +146,43 @@ def why_section(rec: Recommendation, reference_V: float) -> SheetSection:
     SheetSection
         One row per candidate, ranked; those that do not fit listed in the note with their error.
     """
-    header = ["rank", "realisation", "held", "fallen", "tripped", "overloaded", "GM lower/upper (dB)", "PM (deg)",
-              "worst swing (V)", "amps/pots"]
+    header = ["rank", "realisation", "loop on bench", "verdict", "held (weakest, 95 %)", "GM lower/upper (dB)",
+              "PM (deg)", "worst swing (V)", "amps/pots"]
     rows = []
     misfits = []
     for r in table_rows(rec):
         if r["error"]:
-            rows.append(["-", r["realisation"], "does not fit", "", "", "", "", "", "", ""])
+            rows.append(["-", r["realisation"], "", "does not fit", "", "", "", "", ""])
             misfits.append(f"{r['realisation']}: {r['error']}")
             continue
-        rows.append([str(r["rank"]), f"{r['realisation']} ({r['estimator']})", *outcome_cells(r), gm_cell(r),
-                     fmt_figure(r["pm_deg"], "{:.1f}"), f"{r['worst_swing_V']:.2f} of {reference_V:g}",
-                     f"{r['amplifiers']}/{r['pots']}"])
-    note = (f"Bench Monte Carlo: {rec.scenario.name}, {rec.runs} seeds from {rec.seed}, bench actuator, noise and "
-            "drift. A wired loop not stable on the bench ranks last and is never chosen; then ranked by runs held "
-            "(up, inside the switches, no overload), gain margin, phase margin, worst swing."
+        rows.append([str(r["rank"]), f"{r['realisation']} ({r['estimator']})", r["bench_loop"], _verdict_words(r),
+                     held_cell(r), gm_cell(r), fmt_figure(r["pm_deg"], "{:.1f}"),
+                     f"{r['worst_swing_V']:.2f} of {reference_V:g}", f"{r['amplifiers']}/{r['pots']}"])
+    note = (method_text(rec) + " " + verdict_text(rec)
             + (" Not fitting: " + "; ".join(misfits) + "." if misfits else ""))
     return SheetSection("Why this patch", header, rows, note)
 
 
-def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: BenchProfile) -> dict[str, str]:
-    """The best candidate's patch files, with the bench prediction and 'Why this patch' on its
-    sheet, plus recommendation.md and recommendation.json.
+def _reusable_runs(rec: Recommendation, best: Candidate) -> dict:
+    """The chosen candidate's runs of each standard scenario, for the sheet's bench prediction,
+    where the recommendation ran that very scenario from its own seed (run i depends on its seed
+    alone, so they are the prediction's runs)."""
+    done = {}
+    for sc in rec.scenarios:
+        if sc.name in STANDARD and sc == load_scenario(sc.name) and rec.seed_of(sc) == sc.seed:
+            done[sc.name] = best.results(sc.name)
+    return done
 
-    The sheet's 120 s hold reuses the first runs of the recommendation's Monte Carlo when that ran
-    the same scenario from the same seed (run i depends on its seed alone).
+
+def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: BenchProfile) -> dict[str, str]:
+    """The files recommend writes: recommendation.md and recommendation.json always; with a
+    chosen candidate, its patch files (the bench prediction and 'Why this patch' on its sheet)
+    and recommended.toml, its spec.
 
     Parameters
     ----------
     rec : Recommendation
-        Its best candidate must exist (``rec.best``).
+        The ranked candidates.
     machine, bench : MachineProfile, BenchProfile
         Those the recommendation was made on.
 
@@ -140,12 +192,17 @@ def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: Be
         File name -> text.
     """
     best = rec.best
-    same_hold = rec.scenario == load_scenario(SHEET_HOLD) and rec.seed == rec.scenario.seed
-    done = {SHEET_HOLD: list(best.results)} if same_hold else None
-    files = predicted_patch_files(best.design, machine, bench, best.netlist, [why_section(rec, machine.reference_V)],
-                                  done=done)
+    files: dict[str, str] = {}
+    if best is not None:
+        files.update(predicted_patch_files(best.design, machine, bench, best.netlist,
+                                           [why_section(rec, machine.reference_V)], done=_reusable_runs(rec, best)))
+        files[RECOMMENDED_SPEC] = spec_toml(chosen_spec(rec), (
+            f"{rec.spec.name}, as patchgen recommend chose it on the {bench.id} bench: {best.label}.\n"
+            "Every patchgen command takes this file; see recommendation.md for why."))
     files["recommendation.md"] = f"# Why this patch\n\n{table_markdown(rec, machine.reference_V)}"
-    files["recommendation.json"] = json.dumps({"spec": rec.spec.name, "scenario": rec.scenario.name, "runs": rec.runs,
-                                               "seed": rec.seed, "chosen": best.label, "candidates": table_rows(rec)},
-                                              indent=2, sort_keys=True, allow_nan=False) + "\n"
+    files["recommendation.json"] = json.dumps({
+        "spec": rec.spec.name, "bench": bench.id, "machine": machine.id,
+        "scenarios": [{"name": sc.name, "seed": rec.seed_of(sc)} for sc in rec.scenarios],
+        "max_runs": rec.max_runs, "target": TARGET, "chosen": None if best is None else best.label,
+        "verdict": verdict_text(rec), "candidates": table_rows(rec)}, indent=2, sort_keys=True, allow_nan=False) + "\n"
     return files

@@ -1,28 +1,36 @@
-"""Recommend a patch: every way of getting the unmeasured states that the machine can hold,
-each designed, allocated and simulated on the bench, ranked by what the bench would do.
+"""Recommend a patch: every way of getting the unmeasured states that the machine can hold, with
+the spec's actuator model and with the bench's, each designed, allocated and run on the bench in
+every scenario, ranked by what the bench would do.
 
-Candidates (same plant, weights, actuator model and integral states as the spec; only the
-estimator changes): the raw differentiator of the thesis (the machine's default roll-off), a
-filtered differentiator and a reduced-order observer (their speed from the bench noise,
-patchgen.design.corner), and the Kalman estimator (the spec's settings when it has them). A candidate
-that does not fit the machine keeps its resource error in the table.
+Candidates (same plant, weights and integral states as the spec): the raw differentiator of the
+thesis (the machine's default roll-off), a filtered differentiator and a reduced-order observer
+(their speed from the bench noise, patchgen.design.corner), and the Kalman estimator (the spec's
+settings when it has them); and, when the spec's design model of the actuator is not the bench's
+(the thesis's section 5.3 assumed a pure gain where the bench has a 0.2 s lag), each of these
+again designed with the bench's actuator. A candidate that does not fit keeps its error.
 
-Ranking, best first: the fraction of Monte Carlo runs of the scenario in which the pendulum stays
-up, the cart stays inside the limit switches and no amplifier leaves the rails (for the whole
-scenario); then the loop's gain margin (the nearer of the two limits, dB), then its phase margin;
-then the smallest worst amplifier swing; then the fixed candidate order. Figures are rounded
-before ranking so the order is deterministic.
+Each candidate is judged by patchgen.studies.ranking: its wired loop's linear verdict on the bench
+(patchgen.bench.diagnosis), then a sequential Monte Carlo over every scenario (rounds of
+ranking.ROUND_RUNS runs per scenario, stopped once every scenario's held fraction is clearly
+above ranking.TARGET or one is clearly below it, by its Wilson interval, else at ``runs``).
+
+Ranking, best first: simulated; a wired loop stable on the bench (a marginal or unstable one ranks
+below every stable one and is never chosen); holds, undecided, fails; for those that do not
+clearly hold, the weakest scenario's held fraction; then the wired loop's gain margin on the
+bench (the nearer limit, dB) and phase margin; then hardware (units, amplifiers, pots); then the
+candidate order. Figures are rounded before ranking so the order is deterministic.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
-from patchgen.bench.diagnosis import diagnose
-from patchgen.bench.simulate import RunSummary, simulate
+from patchgen.bench.diagnosis import bench_margins, diagnose
+from patchgen.bench.simulate import simulate
 from patchgen.design.lqg import Design, design_on
+from patchgen.design.margins import Margins
 from patchgen.design.model import plant_params
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
@@ -31,6 +39,7 @@ from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.studies.ranking import DECISIONS, ROUND_RUNS, TARGET, ScenarioOutcome, decision, outcome, weakest
 
 CANDIDATES = (
     ("raw differentiator", "differentiator"),
@@ -39,40 +48,65 @@ CANDIDATES = (
     ("Kalman", "kalman"),
 )
 
-
-RUNS = 200  # noise seeds per candidate: the held fraction in steps of half a percent
+RUNS = 200  # the most noise seeds per candidate and scenario
 
 # Figures are rounded before ranking, so that noise in the last digits cannot reorder candidates.
 FRACTION_DIGITS = 6  # fraction of runs held: below one run in a million
 MARGIN_DIGITS = 1  # gain margin (dB) and phase margin (deg), as the table prints them
-SWING_DIGITS = 2  # worst amplifier swing (V), as the table prints it
-INFINITE_MARGIN = -1e9  # the rank figure of an infinite margin: ahead of every finite one
 
 
 @dataclass(frozen=True)
 class Candidate:
-    """One realisation of the estimator: its design, its patch (when it fits the machine) and,
-    once simulated, its bench figures."""
+    """One realisation: its spec, design and patch (when it fits the machine), the wired loop's
+    verdict and margins on the bench and, once simulated, its outcome in each scenario."""
 
     label: str
     kind: str
+    spec: DesignSpec | None
     design: Design | None
     netlist: Netlist | None
     error: str | None  # why it was not simulated (design or resource error, one line)
-    runs: int = 0
-    fraction_ok: float | None = None  # held, inside the switches, no overload, whole scenario
-    fraction_fallen: float | None = None
-    fraction_tripped: float | None = None
-    fraction_overloaded: float | None = None
-    worst_swing_V: float | None = None  # largest |amplifier output| over the runs' peaks
     estimator_detail: str = ""
-    results: tuple[RunSummary, ...] = field(default=(), repr=False, compare=False)  # the Monte Carlo's runs
-    bench_loop: str | None = None  # the wired loop's linear verdict on the bench: stable, marginal, unstable
+    bench_loop: str | None = None  # stable, marginal or unstable (patchgen.bench.diagnosis)
+    bench_loop_line: str = ""
+    margins: Margins | None = field(default=None, compare=False)  # the wired loop's, on the bench
+    outcomes: tuple[ScenarioOutcome, ...] = ()
+
+    @property
+    def simulated(self) -> bool:
+        """Run on the bench in every scenario."""
+        return bool(self.outcomes)
+
+    @property
+    def decision(self) -> str | None:
+        """holds, undecided or fails (patchgen.studies.ranking.decision); None before simulating."""
+        return decision(self.outcomes) if self.outcomes else None
+
+    @property
+    def weakest(self) -> ScenarioOutcome | None:
+        """The scenario held least."""
+        return weakest(self.outcomes)
+
+    @property
+    def fraction_ok(self) -> float | None:
+        """The weakest scenario's held fraction (None before simulating)."""
+        w = self.weakest
+        return None if w is None else w.fraction
+
+    @property
+    def runs(self) -> int:
+        """Runs simulated, over every scenario."""
+        return sum(o.runs for o in self.outcomes)
+
+    @property
+    def worst_swing_V(self) -> float | None:
+        """The largest amplifier output over every scenario's runs."""
+        return max((o.worst_swing_V for o in self.outcomes), default=None)
 
     @property
     def gm_db(self) -> float | None:
-        """Distance to the nearer gain limit, dB (None when the loop is unstable)."""
-        m = self.design.lqg_margins if self.design is not None else None
+        """Distance to the nearer gain limit of the wired loop on the bench, dB (None: not stable)."""
+        m = self.margins
         if m is None or not m.stable:
             return None
         lims = [abs(x) for x in (m.lower_gm_db, m.upper_gm_db) if x is not None]
@@ -80,8 +114,8 @@ class Candidate:
 
     @property
     def pm_deg(self) -> float | None:
-        """Phase margin of the patched loop, deg (None when the loop is unstable)."""
-        m = self.design.lqg_margins if self.design is not None else None
+        """Phase margin of the wired loop on the bench, deg (None when it is not stable)."""
+        m = self.margins
         return None if m is None or not m.stable else m.pm_deg
 
     @property
@@ -94,22 +128,25 @@ class Candidate:
         """Pots the patch uses (None when it does not fit)."""
         return None if self.netlist is None else len(self.netlist.pots)
 
-    def rank_key(self, order: int) -> tuple:
-        """Sort key, best first: simulated, a wired loop that is stable on the bench (a marginal or
-        unstable one ranks below every stable one, whatever its runs did), runs held, fewer
-        units, gain margin, phase margin, smaller swing, then ``order`` (the candidate's place in
-        CANDIDATES)."""
-        if self.fraction_ok is None:
-            return (1, 1, 0.0, 0, 0.0, 0.0, 0.0, order)
-        def r(x):  # larger margins first; none (unstable loop) after every margin
-            if x is not None and math.isfinite(x):
-                return -round(x, MARGIN_DIGITS)
-            return INFINITE_MARGIN if x else 0.0
+    def results(self, scenario: str) -> list:
+        """The runs of one scenario, in seed order (empty if it was not simulated)."""
+        return next((list(o.results) for o in self.outcomes if o.scenario == scenario), [])
 
+    def rank_key(self, order: int) -> tuple:
+        """Sort key, best first (see the module docstring); ``order`` is the candidate's place."""
+        if not self.simulated:
+            return (1, 1, len(DECISIONS), 0.0, 0.0, 0.0, 0, 0, 0, order)
+
+        def r(x):  # larger margins first; infinite ahead of every finite one; none last
+            if x is None:
+                return 0.0
+            return -round(x, MARGIN_DIGITS) if math.isfinite(x) else -math.inf
+
+        dec = self.decision
+        frac = 0.0 if dec == "holds" else -round(self.fraction_ok, FRACTION_DIGITS)
         units = self.netlist.units if self.netlist is not None else 1
-        return (0, 0 if self.bench_loop == "stable" else 1, -round(self.fraction_ok, FRACTION_DIGITS), units,
-                r(self.gm_db), r(self.pm_deg),
-                round(self.worst_swing_V or 0.0, SWING_DIGITS), order)
+        return (0, 0 if self.bench_loop == "stable" else 1, DECISIONS.index(dec), frac, r(self.gm_db),
+                r(self.pm_deg), units, self.amplifiers or 0, self.pots or 0, order)
 
 
 @dataclass(frozen=True)
@@ -117,67 +154,88 @@ class Recommendation:
     """Every candidate, ranked, and the Monte Carlo they were ranked by."""
 
     spec: DesignSpec
-    scenario: Scenario
-    runs: int
-    seed: int
+    scenarios: tuple[Scenario, ...]
+    max_runs: int
+    seed: int | None  # every scenario's base seed; None: each scenario's own
     ranked: tuple[Candidate, ...]
 
     @property
     def best(self) -> Candidate | None:
-        """The first-ranked candidate, if it was simulated and its wired loop is stable on the
-        bench: a loop that is not is never chosen, whatever its runs did."""
+        """The first-ranked candidate if its wired loop is stable on the bench and it held in at
+        least TARGET of the runs of every scenario; None otherwise (a loop that does not balance
+        the pendulum is never chosen, whatever its runs did)."""
         b = self.ranked[0] if self.ranked else None
-        ok = b is not None and b.netlist is not None and b.fraction_ok is not None and b.bench_loop == "stable"
+        ok = (b is not None and b.netlist is not None and b.simulated and b.bench_loop == "stable"
+              and b.decision != "fails" and b.fraction_ok >= TARGET)
         return b if ok else None
 
+    def seed_of(self, scenario: Scenario) -> int:
+        """The base seed a scenario ran from."""
+        return scenario.seed if self.seed is None else self.seed
 
-def candidate_specs(spec: DesignSpec) -> list[tuple[str, str, DesignSpec]]:
-    """The spec with each estimator kind (plant, weights, actuator, integrators unchanged)."""
+
+def candidate_specs(spec: DesignSpec, bench: BenchProfile) -> list[tuple[str, str, DesignSpec]]:
+    """The spec with each estimator kind (plant, weights, integrators unchanged); then, when the
+    spec's actuator model is not the bench's, each again with the bench's actuator."""
+    actuators = [("", spec.actuator)]
+    b = bench.actuator
+    mine = spec.actuator
+    if (mine.model, mine.K_U, mine.tau) != (b.model, b.K_U, b.tau):
+        bench_act = mine.model_copy(update={"model": b.model, "K_U": b.K_U, "tau": b.tau,
+                                            "dead_zone_V": b.dead_zone_V})
+        tag = f"lag {b.tau:g} s" if b.model == "lag" else b.model
+        actuators.append((f", designed with the bench actuator ({tag})", bench_act))
     out = []
-    for label, kind in CANDIDATES:
-        e = spec.estimator
-        upd: dict = {"kind": kind}
-        if kind != e.kind:
-            upd.update(rolloff_s=None, observer_pole=None)
-        out.append((label, kind, spec.model_copy(update={"estimator": e.model_copy(update=upd)})))
+    for suffix, act in actuators:
+        for label, kind in CANDIDATES:
+            e = spec.estimator
+            upd: dict = {"kind": kind}
+            if kind != e.kind or suffix:
+                upd.update(rolloff_s=None, observer_pole=None)
+            est = e.model_copy(update=upd)
+            out.append((label + suffix, kind, spec.model_copy(update={"estimator": est, "actuator": act})))
     return out
 
 
 def prepare(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile) -> list[Candidate]:
-    """Design and allocate every candidate; errors are kept, not raised.
+    """Design and allocate every candidate, with its wired loop's verdict and margins on the bench;
+    errors are kept, not raised.
 
     Parameters
     ----------
     spec : DesignSpec
-        The spec whose estimator is varied.
+        The spec whose estimator (and actuator model) is varied.
     machine, bench : MachineProfile, BenchProfile
-        The machine each candidate is allocated on, the bench its estimator is shaped for.
+        The machine each candidate is allocated on, the bench it is judged on.
 
     Returns
     -------
     list of Candidate
-        In CANDIDATES order; one that does not design or fit keeps its one-line error.
+        In candidate_specs order; one that does not design or fit keeps its one-line error.
     """
     out = []
-    for label, kind, sp in candidate_specs(spec):
+    for label, kind, sp in candidate_specs(spec, bench):
         try:
             d = design_on(sp, machine, bench)
         except InputError as exc:
-            out.append(Candidate(label=label, kind=kind, design=None, netlist=None, error=exc.message))
+            out.append(Candidate(label, kind, sp, None, None, exc.message))
             continue
         try:
             net = build_patch(d, machine, 1)
         except InputError as exc:
             if machine.max_units == 1:
-                out.append(Candidate(label=label, kind=kind, design=d, netlist=None, error=exc.message))
+                out.append(Candidate(label, kind, sp, d, None, exc.message))
                 continue
             try:  # slaved units, as the machine allows
                 net = build_patch(d, machine, "auto")
                 label = f"{label} ({net.units} slaved units)"
             except InputError as exc2:
-                out.append(Candidate(label=label, kind=kind, design=d, netlist=None, error=exc2.message))
+                out.append(Candidate(label, kind, sp, d, None, exc2.message))
                 continue
-        out.append(Candidate(label=label, kind=kind, design=d, netlist=net, error=None, estimator_detail=_detail(d)))
+        plant = plant_params(d.spec)
+        loop = diagnose(net, plant, bench)[-1]
+        out.append(Candidate(label, kind, sp, d, net, None, _detail(d), loop.verdict, loop.line(),
+                             bench_margins(net, plant, bench)))
     return out
 
 
@@ -194,67 +252,137 @@ def _detail(d: Design) -> str:
     return f"rho {e.rho:g}"
 
 
-def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenario: Scenario, runs: int,
-             seed: int | None, progress: Callable[[int], None] | None = None) -> Candidate:
-    """Monte Carlo of one allocated candidate on the bench.
+def _swing(res, machine: MachineProfile) -> float:
+    """The largest amplifier output of a Monte Carlo: run 0's history and every run's u_c (the
+    rails when any run overloaded)."""
+    swing = max([0.0] + [float(abs(res.history[a]).max()) for a in res.amplifiers] if res.history else [0.0])
+    swing = max([swing] + [r.max_abs_u_c_V for r in res.runs])
+    if any(r.overloads for r in res.runs):
+        swing = max(swing, machine.imperfections.saturation_V)
+    return swing
+
+
+def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenarios: Sequence[Scenario],
+             max_runs: int, seed: int | None, early_stop: bool = True,
+             progress: Callable[[int], None] | None = None) -> Candidate:
+    """The sequential Monte Carlo of one allocated candidate on the bench, every scenario.
+
+    Rounds of ROUND_RUNS runs per scenario (run i of a scenario always draws from its seed and i,
+    so a round continues the runs before it) until the candidate clearly holds or clearly fails
+    (patchgen.studies.ranking.decision), or every scenario has ``max_runs`` runs.
+
+    Parameters
+    ----------
+    c : Candidate
+        An allocated candidate.
+    bench, machine : BenchProfile, MachineProfile
+        What it runs on.
+    scenarios : sequence of Scenario
+        Every scenario it is judged on.
+    max_runs : int
+        The most runs per scenario.
+    seed : int, optional
+        Every scenario's base seed (default: each scenario's own).
+    early_stop : bool
+        Stop at a clear decision; False runs ``max_runs`` of every scenario.
+    progress : callable, optional
+        Called with the runs done so far (over every scenario).
 
     Returns
     -------
     Candidate
-        ``c`` with its bench figures: runs held (no overload), fallen, tripped, overloaded,
-        worst swing (the rails when any run overloaded) and the runs themselves.
+        ``c`` with its outcomes.
     """
     plant = plant_params(c.design.spec)
-    res = simulate(c.netlist, plant, bench, machine, scenario, seed=seed, runs=runs,
-                   keep_history=True, progress=progress)
-    D = res.distribution
-    ok = sum(1 for r in res.runs if r.held and not r.overloads) / len(res.runs)
-    swing = max(float(abs(res.history[a]).max()) for a in res.amplifiers)
-    swing = max([swing] + [r.max_abs_u_c_V for r in res.runs])
-    if any(r.overloads for r in res.runs):
-        swing = max(swing, machine.imperfections.saturation_V)
-    return replace(c, error=None, runs=runs, fraction_ok=ok, fraction_fallen=D.fraction_fallen,
-                   fraction_tripped=D.fraction_tripped, fraction_overloaded=D.fraction_overloaded,
-                   worst_swing_V=swing, results=tuple(res.runs),
-                   bench_loop=diagnose(c.netlist, plant, bench)[-1].verdict)
+    runs_of = {sc.name: [] for sc in scenarios}
+    swing = {sc.name: 0.0 for sc in scenarios}
+    done = 0
+    outcomes: tuple[ScenarioOutcome, ...] = ()
+    while True:
+        for sc in scenarios:
+            have = len(runs_of[sc.name])
+            n = min(ROUND_RUNS, max_runs - have)
+            if n <= 0:
+                continue
+            res = simulate(c.netlist, plant, bench, machine, sc, seed=seed, runs=n, first_run=have,
+                           keep_history=have == 0)
+            runs_of[sc.name].extend(res.runs)
+            swing[sc.name] = max(swing[sc.name], _swing(res, machine))
+            done += n
+            if progress is not None:
+                progress(done)
+        outcomes = tuple(outcome(sc.name, runs_of[sc.name], swing[sc.name]) for sc in scenarios)
+        full = all(len(v) >= max_runs for v in runs_of.values())
+        if full or (early_stop and decision(outcomes) != "undecided"):
+            return replace(c, outcomes=outcomes)
 
 
-def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenario: Scenario,
-              runs: int = RUNS, seed: int | None = None,
+def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenarios: Sequence[Scenario],
+              runs: int = RUNS, seed: int | None = None, early_stop: bool = True,
               progress: Callable[[str, int, int], None] | None = None) -> Recommendation:
-    """Design, allocate and simulate every candidate, and rank them.
+    """Design, allocate and simulate every candidate on every scenario, and rank them.
 
     Parameters
     ----------
     spec : DesignSpec
-        The spec whose estimator is varied.
+        The spec whose estimator (and actuator model) is varied.
     machine, bench : MachineProfile, BenchProfile
         The machine the patches are allocated on and the bench they are simulated on.
-    scenario : Scenario
-        The Monte Carlo's scenario.
+    scenarios : sequence of Scenario
+        The scenarios every candidate must hold (the command's default: every shipped one).
     runs : int
-        Noise seeds per candidate.
+        The most noise seeds per candidate and scenario.
     seed : int, optional
-        Base seed (default: the scenario's).
+        Every scenario's base seed (default: each scenario's own).
+    early_stop : bool
+        End a candidate's Monte Carlo once it clearly holds or clearly fails.
     progress : callable, optional
-        Called as ``progress(label, done, total)`` while the Monte Carlo runs: the candidate
-        being simulated, the runs done and the runs to do over all candidates that fit.
+        Called as ``progress(label, done, total)``: the candidate being simulated, the runs done
+        and the most runs there can be over every candidate that fits (it may finish early).
 
     Returns
     -------
     Recommendation
-        The candidates ranked best first (see the module's ranking).
+        The candidates ranked best first (see the module docstring).
     """
     cands = prepare(spec, machine, bench)
-    total = runs * sum(c.netlist is not None for c in cands)
+    per = runs * len(scenarios)
+    total = per * sum(c.netlist is not None for c in cands)
     done, base = [], 0
     for c in cands:
         if c.netlist is None:
             done.append(c)
             continue
         cb = (lambda n, lab=c.label, b=base: progress(lab, b + n, total)) if progress else None
-        done.append(evaluate(c, bench, machine, scenario, runs, seed, cb))
-        base += runs
-    order = {c.label: i for i, c in enumerate(done)}
-    ranked = tuple(sorted(done, key=lambda c: c.rank_key(order[c.label])))
-    return Recommendation(spec, scenario, runs, scenario.seed if seed is None else seed, ranked)
+        done.append(evaluate(c, bench, machine, scenarios, runs, seed, early_stop, cb))
+        base += per
+        if progress is not None:
+            progress(c.label, base, total)
+    order = {id(c): i for i, c in enumerate(done)}
+    ranked = tuple(sorted(done, key=lambda c: c.rank_key(order[id(c)])))
+    return Recommendation(spec, tuple(scenarios), runs, seed, ranked)
+
+
+def chosen_spec(rec: Recommendation) -> DesignSpec:
+    """The chosen candidate as a spec every other command takes (``recommended.toml``): its
+    estimator and actuator model, with the settings chosen from the bench noise fixed (roll-off,
+    observer pole, Kalman rho) and the slaved units it needs, so that patching it gives the
+    chosen patch again."""
+    b = rec.best
+    if b is None:
+        raise ValueError("no candidate was chosen")
+    e, sp = b.design.estimator, b.spec
+    upd: dict = {}
+    if e is not None and e.kind in ("differentiator", "filtered_differentiator"):
+        upd["rolloff_s"] = e.rolloff_s
+    elif e is not None and e.kind == "reduced_observer":
+        upd["observer_pole"] = e.observer.pole
+    elif e is not None and e.kind == "kalman" and e.rho is not None:
+        upd["rho"] = e.rho
+    return sp.model_copy(update={
+        "name": f"{rec.spec.name}-recommended",
+        "description": f"{b.label}: chosen by patchgen recommend on the bench",
+        "source": f"patchgen recommend {rec.spec.path}",
+        "estimator": sp.estimator.model_copy(update=upd),
+        "patch": sp.patch.model_copy(update={"units": b.netlist.units}),
+    })

@@ -3,7 +3,9 @@
 Every amplifier inverts. A block's amplifier output is P * (its signal) with a polarity P
 chosen here; an input term c_j v_j must then arrive as -P sign(c_j) v_j. A term whose signal
 is available only at the other polarity is served either by a shared inverter of that signal
-or by one pre-summer per consuming block that collects all its mismatched terms. The choice
+or by one pre-summer per consuming block that collects all its mismatched terms (a single such
+term with a gain above 1 is inverted at unit gain and its gain put on the block's input, so that
+no partial sum amplifies its source toward the rails). The choice
 of polarities and inverters that needs the fewest amplifiers wins (ties: fewer inverters,
 then the first in a fixed order), so the result is deterministic.
 
@@ -107,9 +109,16 @@ def _jacks_fit(blocks: list[Block], kept: dict[str, list[Term]], pre: dict[str, 
     for b in blocks:
         main = {w: 0 for w in ws}
         staged = {w: 0 for w in ws}
-        if b.name in pre:
+        staged_terms = [t for t in kept[b.name] if t.signal in pre.get(b.name, ())]
+        if len(staged_terms) == 1 and abs(staged_terms[0].coeff) > 1:  # a unit inverter; the gain at the block
+            main[weight_for(abs(staged_terms[0].coeff), machine)] += 1
+            staged[min(ws)] += 1
+            staged_terms = []
+        elif b.name in pre:
             main[min(ws)] += 1
         for t in kept[b.name]:
+            if t.signal in pre.get(b.name, ()) and not staged_terms:
+                continue
             w = weight_for(abs(t.coeff), machine)
             (staged if t.signal in pre.get(b.name, ()) else main)[w] += 1
         if any(main[w] > cap[w] or staged[w] > cap[w] for w in ws):
@@ -165,7 +174,14 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
             else:
                 staged.append((t.signal, have, t.coeff))
             wanted[(b.name, t.signal, t.coeff)] = t.wanted
-        if staged:
+        if len(staged) == 1 and abs(staged[0][2]) > 1:
+            # one term the other way round, with gain: a unit inversion (output -have v = -P sign(c) v),
+            # the gain on the block's own input, so that the inverter's output is no larger than its source
+            sig, have, c = staged[0]
+            stages.append(_Stage(f"pre:{b.name}", "summer", ((sig, have, math.copysign(1.0, c)),), b.name,
+                                 -P[b.name], None))
+            direct.append((f"pre:{b.name}", None, c))
+        elif staged:
             # pre-summer output = -sum |c| (have v) = -P sum c v: enters the block with weight 1
             stages.append(_Stage(f"pre:{b.name}", "summer", tuple(staged), b.name, -P[b.name], None))
             direct.append((f"pre:{b.name}", None, None))

@@ -6,6 +6,7 @@ from patchgen.design.lqg import Design
 from patchgen.inputs.errors import ResourceError
 from patchgen.patch.allocation import allocate
 from patchgen.patch.netlist import Netlist
+from patchgen.patch.parts import parts_for
 from patchgen.patch.realization import realize
 from patchgen.profiles.machine import MachineProfile
 
@@ -46,5 +47,6 @@ def _check_law_reaches_pots(real, machine: MachineProfile, spec) -> None:
 
 def _place(design: Design, real, machine: MachineProfile, units: int) -> Netlist:
     net = allocate(real, machine.slaved(units), design.spec.path)
-    return net.model_copy(update={"description": design.spec.description, "units": units,
-                                  "machine_name": machine.name})
+    net = net.model_copy(update={"description": design.spec.description, "units": units,
+                                 "machine_name": machine.name})
+    return net.model_copy(update={"parts": parts_for(net, machine)})

@@ -1,6 +1,7 @@
 """The netlist: what is patched on the machine, as a versioned JSON document.
 
-Schema id ``patchgen.netlist/1``. Ideal meaning of each amplifier role (all amplifiers invert;
+Schema id ``patchgen.netlist/2`` (2 added ``parts``, the external parts a patch needs). Ideal
+meaning of each amplifier role (all amplifiers invert;
 ``k_j`` is the pot setting feeding input j, or 1 with no pot; ``w_j`` the input weight 1 or 10;
 ``T`` the machine time scale):
 
@@ -25,7 +26,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-SCHEMA_ID = "patchgen.netlist/1"
+SCHEMA_ID = "patchgen.netlist/2"
 
 AmpRole = Literal["integrator", "summer", "inverter", "differentiator", "lag"]
 
@@ -98,6 +99,23 @@ class Pot(_Doc):
         return self.realized / self.coefficient - 1.0
 
 
+class Part(_Doc):
+    """An external part a patch needs beyond the machine's own (patchgen.patch.parts): its value,
+    what to fit, its tolerance and where it goes."""
+
+    id: str = Field(description="C1, C2, ... and R1, R2, ...")
+    kind: Literal["capacitor", "resistor"]
+    value: float = Field(gt=0, description="nominal value, F or ohm, as the element values need it")
+    unit: Literal["F", "ohm"]
+    fit: str = Field(description="stock part(s) to fit, e.g. '6.34 kohm (E96)' or '68 nF + 3.3 nF in parallel'")
+    fit_value: float = Field(gt=0, description="the value the stock part(s) give")
+    tolerance: float = Field(ge=0, description="the stock parts' tolerance, a fraction")
+    amplifier: str
+    jack: str | None = Field(default=None, description="the input jack it serves, or none (feedback)")
+    connection: str = Field(description="where it goes, in words")
+    purpose: str = ""
+
+
 class ControlOutput(_Doc):
     """Where the control voltage u_c leaves the machine for the servo amplifier."""
 
@@ -122,6 +140,7 @@ class Netlist(_Doc):
     amplifiers: list[Amplifier]
     pots: list[Pot]
     output: ControlOutput
+    parts: list[Part] = Field(default_factory=list, description="external parts, in amplifier order")
     operation: list[str] = Field(default_factory=list, description="mode and IC steps, in order")
     notes: list[str] = Field(default_factory=list)
 

@@ -6,7 +6,8 @@ s_dot (table A.2). Other signals come from blocks the allocator will put on ampl
 - ``sum``:           v = sum_j c_j v_j
 - ``integrate``:     dv/dt = (1/T) sum_j c_j v_j           (T: the machine's time scale)
 - ``differentiate``: (rolloff s + 1) v = T_d s sum_j c_j v_j
-- ``lag``:           (tau s + 1) v = sum_j c_j v_j
+- ``lag``:           (tau s + 1) v = sum_j c_j v_j  (built as an integrator with its own output
+                     fed back through a pot when the coefficients allow: see lag_block)
 
 The control voltage is the block ``u_c``: u_c = F/K_U = -(1/K_U) K x, so the coefficient on a
 state's voltage is -K_i / (K_sensor_i K_U); conventions.md's wired gain K_i/(K_sensor_i K_U) is
@@ -108,11 +109,30 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
         if spec.actuator.model != "lag":
             raise spec.error("actuator.model", "an actuator state with a zero can only be patched with a "
                              "Kalman estimator")
-        blocks.append(Block("actuator", "lag", (Term("u_c", 1.0),), scale["actuator"], "N",
-                            "actuator state from a first-order lag model driven by u_c", tau_s=tau))
+        blocks.append(lag_block("actuator", (Term("u_c", 1.0),), scale["actuator"], "N",
+                                "actuator state from a first-order lag model driven by u_c", tau, T,
+                                max(machine.input_weights) * machine.pot_max))
     terms = tuple(Term(s, -float(design.K[0, i]) / (scale[s] * KU)) for i, s in enumerate(states))
     blocks.append(Block("u_c", "sum", terms, 1.0, "V", "control voltage to the servo amplifier"))
     return Realization(spec.name, ks, tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
+
+
+def lag_block(name: str, terms: tuple[Term, ...], volts_per_unit: float, unit: str, purpose: str, tau: float,
+              T: float, top: float) -> Block:
+    """A first-order lag (tau s + 1) v = sum c_j v_j, built from the machine's own parts where it can.
+
+    As an integrator with its own output fed back through a pot: dv/dt = (1/T) (sum (T/tau) c_j v_j
+    - (T/tau) v), so the time constant is a dial setting (T/tau on a weighted input) and no external
+    part is needed. That takes every coefficient times T/tau within ``top`` (the largest weighted
+    input); otherwise the block stays a lag (a summer with an external capacitor tau/R_f across its
+    feedback resistor, patchgen.patch.parts).
+    """
+    k = T / tau
+    if k <= top and all(abs(t.coeff) * k <= top for t in terms):
+        scaled = tuple(Term(t.signal, t.coeff * k, None if t.design is None else t.design * k) for t in terms)
+        return Block(name, "integrate", scaled + (Term(name, -k),), volts_per_unit, unit,
+                     f"{purpose}; a lag of {tau:g} s: an integrator with its output fed back through a pot")
+    return Block(name, "lag", terms, volts_per_unit, unit, purpose, tau_s=tau)
 
 
 def _integral_blocks(design: Design, ks: dict[str, float], T: float):
@@ -194,9 +214,9 @@ def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
                 terms.append(Term(m, _exact(tau * obs.G[i, k] * alpha[s] / ks[m], top)))
         if obs.H[i] != 0:
             terms.append(Term("u_c", _exact(tau * obs.H[i] * alpha[s] * KU, top)))
-        blocks.append(Block(f"z_{s}", "lag", tuple(terms), alpha[s], STATE_UNITS[s],
-                            f"reduced observer: {s} estimate minus its sensor part (pole {obs.pole:g} rad/s)",
-                            tau_s=tau))
+        blocks.append(lag_block(f"z_{s}", tuple(terms), alpha[s], STATE_UNITS[s],
+                                f"reduced observer: {s} estimate minus its sensor part (pole {obs.pole:g} rad/s)",
+                                tau, T, top))
     scale = {f"z_{s}": alpha[s] for s in w}
     ints, int_scale, notes = _integral_blocks(design, ks, T)
     blocks += ints

@@ -42,6 +42,10 @@ class Components(InputModel):
     differentiator_capacitor_F: Real = bounded(*FARAD)
     opamp_open_loop_gain: Real = bounded(1, 1e12, open_lo=True)
     opamp_output_resistance_ohm: Real = bounded(0, 1e6)
+    external_resistor_tolerance: Real = bounded(0, 0.5, default=0.01,
+                                                description="of an external resistor (1 %: E96 metal film)")
+    external_capacitor_tolerance: Real = bounded(0, 0.5, default=0.05,
+                                                 description="of an external capacitor (5 %: film)")
 
     def input_resistor_ohm(self, weight: int) -> float:
         """The input resistor of a weight-``weight`` input: the profile's own value for x1 and

@@ -26,6 +26,7 @@ from patchgen.bench.circuit import sensor_constants
 from patchgen.bench.noise_drift import NoiseAndDrift
 from patchgen.inputs.scenario import Disturbance
 from patchgen.patch.netlist import Amplifier, Netlist, Pot
+from patchgen.patch.parts import parts_for
 from patchgen.patch.reading import Reading, Stage, read
 from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
@@ -187,16 +188,17 @@ def _amplifier(d: DeckLines, net: Netlist, reading: Reading, amp: Amplifier, mac
         d.add(f"I_{n}_bias {sj} 0 DC {num(bias)}")
 
     pots = {p.id: p for p in net.pots}
+    parts = [p for p in (net.parts or parts_for(net, machine)) if p.amplifier == amp.id]
     if amp.role == "differentiator":
         T_d, roll = stage.T_d_s, stage.rolloff_s  # as patchgen.patch.reading resolves them
         for inp in amp.inputs:
             src = (_pot(d, reading, machine, pots[inp.pot], None) if inp.pot else _source_node(reading, inp.source))
-            cap = inp.weight * T_d / c.feedback_resistor_ohm
+            cap, res = (next(p for p in parts if p.jack == inp.jack and p.kind == k) for k in ("capacitor", "resistor"))
             mid = f"{n}_{spice_name(inp.jack)}_m"
-            d.comment(f"{inp.jack}: input capacitor {num(cap)} F (x{inp.weight}, T_d {T_d} s; profile C "
-                      f"{num(c.differentiator_capacitor_F)} F) and series resistor for a {roll} s roll-off")
-            d.add(f"C_{n}_{spice_name(inp.jack)} {src} {mid} {num(cap)}",
-                  f"R_{n}_{spice_name(inp.jack)}_s {mid} {sj} {num(roll / cap)}")
+            d.comment(f"{inp.jack}: input capacitor {cap.id} (x{inp.weight}, T_d {T_d} s) and series resistor "
+                      f"{res.id} for a {roll} s roll-off (the netlist's parts)")
+            d.add(f"C_{n}_{spice_name(inp.jack)} {src} {mid} {num(cap.value)}",
+                  f"R_{n}_{spice_name(inp.jack)}_s {mid} {sj} {num(res.value)}")
         d.add(f"R_{n}_f {sj} {fb} {num(c.feedback_resistor_ohm)}")
         return
 
@@ -209,7 +211,7 @@ def _amplifier(d: DeckLines, net: Netlist, reading: Reading, amp: Amplifier, mac
     elif amp.role == "integrator":
         d.add(f"C_{n}_f {sj} {fb} {num(cap)}")
         _capacitor_ic(d, sj, fb, amp, offset)
-    elif amp.role == "lag":
+    elif amp.role == "lag":  # a summer with the parts list's capacitor across its feedback resistor
         d.add(f"R_{n}_f {sj} {fb} {num(c.feedback_resistor_ohm)}", f"C_{n}_f {sj} {fb} {num(cap)}")
         _capacitor_ic(d, sj, fb, amp, offset)
     else:  # pragma: no cover - the schema admits no other role
@@ -222,7 +224,7 @@ def _feedback_capacitor(stage: Stage, machine: MachineProfile) -> float | None:
     lag's tau over the feedback resistor. None for the other roles."""
     if stage.role == "integrator":
         return stage.T_s / machine.components.input_resistor_ohm(1)
-    if stage.role == "lag":
+    if stage.role == "lag":  # the external capacitor of patchgen.patch.parts: tau / R_f
         return stage.tau_s / machine.components.feedback_resistor_ohm
     return None
 

@@ -118,7 +118,7 @@ def test_random_designs_patch_within_pot_range_and_roundtrip(spec):
         assert "exceeds 10" in exc.line() or "needs" in exc.line()
         return
     assert all(0 <= p.setting <= 1 for p in net.pots)
-    assert json.loads(net.to_json())["schema"] == "patchgen.netlist/1"
+    assert json.loads(net.to_json())["schema"] == "patchgen.netlist/2"
     check_roundtrip(d, net, m.pot_resolution)
 
 

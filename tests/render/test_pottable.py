@@ -36,7 +36,7 @@ def test_csv_reads_back_to_the_rows(net):
     assert tuple(reader.fieldnames) == COLUMNS
     back = list(reader)
     assert back == [{k: str(v) for k, v in row.items()} for row in pot_rows(net)]
-    assert [r["pot"] for r in back] == [p.id for p in net.pots] == ["P1", "P2", "P3", "P4", "P5"]
+    assert [r["pot"] for r in back] == [p.id for p in net.pots] == ["P1", "P2", "P3", "P4", "P5", "P6", "P7"]
     assert text.endswith("\n") and "\r" not in text
 
 
@@ -49,15 +49,19 @@ def test_each_row_is_its_pot(net):
         want_pct = 100 * (float(row["realized"]) / float(row["coefficient"]) - 1)
         assert float(row["error_pct"]) == pytest.approx(want_pct, abs=2e-3)
         assert (row["amplifier"], row["input"], row["signal"]) == (p.amplifier, p.jack, p.signal)
-    # one case by hand (the recommended patch on the GP-6): theta into A7 through a x10 input
-    p2 = pot_rows(net)[1]
-    assert (p2["setting"], p2["signal"], p2["weight"], p2["realized"]) == ("0.915", "theta", 10, "9.15")
+    # by hand (the recommended patch on the GP-6): theta into A7 through a x10 input; the actuator lag
+    # of 0.2 s as an integrator whose own output comes back through P1 at 0.5 on a x10 input (T/tau = 5)
+    p4 = pot_rows(net)[3]
+    assert (p4["setting"], p4["signal"], p4["weight"], p4["realized"]) == ("0.915", "theta", 10, "9.15")
+    p1 = pot_rows(net)[0]
+    assert (p1["setting"], p1["signal"], p1["amplifier"], p1["weight"], p1["realized"]) == (
+        "0.500", "actuator", "A1", 10, "-5")
 
 
 def test_a_coefficient_of_zero_has_no_error_percentage(net):
     odd = _with_zero_coefficient(net)
     assert pot_rows(odd)[0]["error_pct"] == "inf"
-    assert "\nP1,0.107,s,A7,x1a,1,0,0.107,inf,\n" in pots_csv(odd)
+    assert "\nP1,0.500,actuator,A1,x10a,10,0,-5,inf,\n" in pots_csv(odd)
     console = Console(file=io.StringIO(), width=200, record=True)
     console.print(pot_table(odd, GP6.procedure.pot_setting))
     p1 = next(line for line in console.export_text().splitlines() if "P1" in line)

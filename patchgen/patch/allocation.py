@@ -3,9 +3,9 @@
 Every amplifier inverts. A block's amplifier output is P * (its signal) with a polarity P
 chosen here; an input term c_j v_j must then arrive as -P sign(c_j) v_j. A term whose signal
 is available only at the other polarity is served either by a shared inverter of that signal
-or by one pre-summer per consuming block that collects all its mismatched terms (a single such
-term with a gain above 1 is inverted at unit gain and its gain put on the block's input, so that
-no partial sum amplifies its source toward the rails). The choice
+or by one pre-summer per consuming block that collects all its mismatched terms (one that would
+carry a single term with a gain above 1 becomes a unit inverter, the gain on the block's input, so
+that no partial sum amplifies its source toward the rails). The choice
 of polarities and inverters that needs the fewest amplifiers wins (ties: fewer inverters,
 then the first in a fixed order), so the result is deterministic.
 
@@ -109,16 +109,9 @@ def _jacks_fit(blocks: list[Block], kept: dict[str, list[Term]], pre: dict[str, 
     for b in blocks:
         main = {w: 0 for w in ws}
         staged = {w: 0 for w in ws}
-        staged_terms = [t for t in kept[b.name] if t.signal in pre.get(b.name, ())]
-        if len(staged_terms) == 1 and abs(staged_terms[0].coeff) > 1:  # a unit inverter; the gain at the block
-            main[weight_for(abs(staged_terms[0].coeff), machine)] += 1
-            staged[min(ws)] += 1
-            staged_terms = []
-        elif b.name in pre:
+        if b.name in pre:
             main[min(ws)] += 1
         for t in kept[b.name]:
-            if t.signal in pre.get(b.name, ()) and not staged_terms:
-                continue
             w = weight_for(abs(t.coeff), machine)
             (staged if t.signal in pre.get(b.name, ()) else main)[w] += 1
         if any(main[w] > cap[w] or staged[w] > cap[w] for w in ws):
@@ -159,7 +152,8 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
     """Place the realization on the machine; a shortfall raises ResourceError (one line)."""
     blocks, kept, notes, too_big = _plan_terms(real, machine)
     _check_lower_bound(blocks, kept, machine, source)
-    P, inverted, _ = _search(blocks, kept, machine)
+    P, inverted, pre = _search(blocks, kept, machine)
+    inverted = _unit_inverters(blocks, kept, P, inverted, pre, machine)
     stages: list[_Stage] = []
     wanted: dict[tuple[str, str, float], float] = {}
     for b in blocks:
@@ -174,14 +168,7 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
             else:
                 staged.append((t.signal, have, t.coeff))
             wanted[(b.name, t.signal, t.coeff)] = t.wanted
-        if len(staged) == 1 and abs(staged[0][2]) > 1:
-            # one term the other way round, with gain: a unit inversion (output -have v = -P sign(c) v),
-            # the gain on the block's own input, so that the inverter's output is no larger than its source
-            sig, have, c = staged[0]
-            stages.append(_Stage(f"pre:{b.name}", "summer", ((sig, have, math.copysign(1.0, c)),), b.name,
-                                 -P[b.name], None))
-            direct.append((f"pre:{b.name}", None, c))
-        elif staged:
+        if staged:
             # pre-summer output = -sum |c| (have v) = -P sum c v: enters the block with weight 1
             stages.append(_Stage(f"pre:{b.name}", "summer", tuple(staged), b.name, -P[b.name], None))
             direct.append((f"pre:{b.name}", None, None))
@@ -192,6 +179,24 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
     if too_big:
         raise ResourceError(source, "machine", too_big[0] + f" ({len(too_big)} such coefficients)")
     return _emit(real, machine, stages, P, notes, wanted)
+
+
+def _unit_inverters(blocks: list[Block], kept: dict[str, list[Term]], P: dict[str, int], inverted: set[str],
+                    pre: dict[str, set[str]], machine: MachineProfile) -> set[str]:
+    """A pre-summer that would carry a single term with a gain above 1 becomes a unit inverter of
+    that signal instead (the same amplifier count), with the gain on the block's own input: a
+    partial sum must not amplify its source toward the rails (a lag's input, say, scaled by
+    T/tau). Kept as a pre-summer when the block's jacks would not take the extra weighted input."""
+    out = set(inverted)
+    for b, staged in sorted(pre.items()):
+        terms = [t for t in kept[b] if t.signal in staged]
+        if len(terms) != 1 or abs(terms[0].coeff) <= 1 or terms[0].signal in out:
+            continue
+        trial = out | {terms[0].signal}
+        rest = {n: {s for s in m if s not in trial} for n, m in pre.items()}
+        if _jacks_fit(blocks, kept, {n: m for n, m in rest.items() if m}, machine):
+            out = trial
+    return out
 
 
 def _check_lower_bound(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile,

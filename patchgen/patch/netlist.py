@@ -174,14 +174,27 @@ def json_schema() -> dict:
 
 
 def wire_list(net: Netlist) -> list[tuple[str, str]]:
-    """Every patch cord as (from, to), in a stable order: pots fed first, then amplifier inputs."""
+    """Every patch cord as (from, to), in a stable order: pots fed first, then amplifier inputs (a
+    differentiator's through its external capacitor and series resistor), then parts across a
+    feedback."""
     wires: list[tuple[str, str]] = []
     for p in net.pots:
         wires.append((_jack_name(net, p.source), f"{p.id} top"))
     for a in net.amplifiers:
         for inp in a.inputs:
             src = f"{inp.pot} wiper" if inp.pot else _jack_name(net, inp.source)
+            cap = next((x for x in net.parts if x.amplifier == a.id and x.jack == inp.jack and x.kind == "capacitor"),
+                       None)
+            res = next((x for x in net.parts if x.amplifier == a.id and x.jack == inp.jack and x.kind == "resistor"),
+                       None)
+            if cap is not None and res is not None:  # a differentiator's input: capacitor, then series resistor
+                wires += [(src, f"{cap.id} ({cap.fit})"), (cap.id, f"{res.id} ({res.fit})"),
+                          (res.id, f"{a.id} summing junction (x{inp.weight} input resistor unused)")]
+                continue
             wires.append((src, f"{a.id} in {inp.jack} (x{inp.weight})"))
+        for x in net.parts:
+            if x.amplifier == a.id and x.jack is None:
+                wires.append((f"{x.id} ({x.fit})", f"across {a.id} feedback: summing junction to output"))
     wires.append((_jack_name(net, net.output.source), "servo amplifier command input (u_c)"))
     return wires
 

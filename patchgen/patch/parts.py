@@ -54,8 +54,8 @@ def _nearest(value: float, series: tuple[float, ...]) -> float:
 
 
 def fmt_value(value: float, unit: str) -> str:
-    """A part value with an SI prefix: 6.34 kohm, 68 nF, 1 uF."""
-    for f, prefix in ((1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "u"), (1e-9, "n"), (1e-12, "p")):
+    """A part value with an SI prefix: 6.34 kΩ, 68 nF, 1 µF."""
+    for f, prefix in ((1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p")):
         if value >= f * (1 - 1e-9):
             return f"{value / f:.3g} {prefix}{unit}"
     return f"{value:.3g} {unit}"
@@ -64,7 +64,7 @@ def fmt_value(value: float, unit: str) -> str:
 def resistor_fit(value: float) -> tuple[str, float]:
     """The nearest E96 resistor: (text, its value)."""
     r = float(f"{_nearest(value, E96):.3g}")
-    return f"{fmt_value(r, 'ohm')} (E96)", r
+    return f"{fmt_value(r, 'Ω')} (E96)", r
 
 
 def capacitor_fit(value: float) -> tuple[str, float]:

@@ -14,7 +14,9 @@ from dataclasses import dataclass, field
 import jinja2
 
 from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
+from patchgen.patch.parts import fmt_value
 from patchgen.patch.reading import read
+from patchgen.patch.realization import STATE_UNITS
 from patchgen.profiles.machine import Procedure
 from patchgen.render.diagram_symbols import dial_decimals, quantity_label, signed_label
 
@@ -27,6 +29,7 @@ class SheetSection:
     header: list[str]
     rows: list[list[str]]
     note: str = ""
+    banner: str = ""  # one line shown at the top of the sheet (a patch predicted to fail says why)
 
 
 @dataclass(frozen=True)
@@ -123,14 +126,19 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         sign_checks.append({"pot": p.id, "moved": moved, "through": p.source,
                             "u_c": "+" if sign * pol > 0 else "−"})
 
-    states = [{"state": quantity_label(s), "name": s, "K": _minus(f"{k:.6g}")}
+    states = [{"state": quantity_label(s), "name": s, "K": _minus(f"{k:.6g}"), "unit": gain_unit(s)}
               for s, k in zip(summary.states, summary.K)]
+    parts = [{"id": p.id, "fit": p.fit, "value": fmt_value(p.value, "Ω" if p.unit == "ohm" else "F"),
+              "tolerance": f"±{100 * p.tolerance:g} %", "where": f"{p.amplifier}{' ' + p.jack if p.jack else ''}",
+              "connection": p.connection, "purpose": p.purpose} for p in net.parts]
     margins = [{"loop": loop, "figures": [(name, _fmt(v)) for name, v in figs.items()]}
                for loop, figs in summary.margins.items()]
 
     # the diagram gets the room the extra sections leave on two printed pages
     diagram_mm = 96 if len(summary.sections) <= 1 else 68
     return {
+        "banners": [sec.banner for sec in summary.sections if sec.banner],
+        "parts": parts,
         "diagram_mm": diagram_mm,
         "net": net,
         "summary": summary,
@@ -141,7 +149,6 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "pots": pots,
         "amplifiers": amplifiers,
         "wires": wires,
-        "operation": list(net.operation),
         "ics": ics,
         "sign_checks": sign_checks,
         "checklist": procedure.steps("checklist", machine=net.machine_name, units=net.units,
@@ -155,6 +162,17 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
     }
 
 
+def gain_unit(state: str) -> str:
+    """The unit of a state's gain in u = -K x (u in N): N per the state's unit (N s/m for m/s)."""
+    unit = STATE_UNITS.get(state, "")
+    if unit == "N":
+        return "N/N"
+    if "/" in unit:
+        num, den = unit.split("/", 1)
+        return f"N {den}/{num}"
+    return f"N/({unit})" if " " in unit else f"N/{unit}" if unit else "N"
+
+
 def _carries(a: Amplifier) -> str:
     c = a.carries
     label = signed_label(c.polarity, c.quantity)
@@ -165,7 +183,7 @@ def _carries(a: Amplifier) -> str:
 
 def _input_text(inp, source_name) -> str:
     via = f" via {inp.pot}" if inp.pot else ""
-    return f"{inp.jack} (x{inp.weight}) ← {source_name(inp.source)}{via}"
+    return f"{inp.jack} ← {source_name(inp.source)}{via}"
 
 
 def _amp_settings(a: Amplifier) -> str:

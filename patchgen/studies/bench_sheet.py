@@ -21,6 +21,7 @@ from patchgen.render.sheet import SheetSection
 if TYPE_CHECKING:  # pragma: no cover - the simulator loads numba, only when a prediction is made
     from patchgen.bench.simulate import RunSummary
 
+PREDICTION_TARGET = 0.95  # a scenario held in fewer of its runs than this is a predicted failure
 HOLD_RUNS = 20  # noise seeds of the sheet's 120 s hold unless asked otherwise (patchgen patch --runs)
 
 
@@ -46,10 +47,12 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
     SheetSection
         One row per scenario and a note naming the bench's figures and the linearised loop.
     """
+    from patchgen.bench.diagnosis import diagnose
     from patchgen.bench.prediction import diagnosis_note, predict, prediction_rows  # the simulator: numba
 
     plant = plant_params(d.spec)
-    header, rows = prediction_rows(predict(net, plant, bench, machine, runs_hold=runs_hold, done=done))
+    preds = predict(net, plant, bench, machine, runs_hold=runs_hold, done=done)
+    header, rows = prediction_rows(preds)
     dist = bench.disturbance
     note = (f"From this netlist on the {bench.id} bench: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
             f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; random "
@@ -58,7 +61,24 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
             f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s ({machine.imperfections.drift_source}); "
             f"rails +/-{machine.imperfections.saturation_V:g} V; switches at +/-{d.spec.plant.d / 2:g} m. "
             + diagnosis_note(net, plant, bench))
-    return SheetSection("Predicted on the bench", header, rows, note)
+    return SheetSection("Predicted on the bench", header, rows, note,
+                        banner=failure_banner(bench.id, diagnose(net, plant, bench)[-1], preds))
+
+
+def failure_banner(bench_id: str, loop, preds) -> str:
+    """One line for the top of the sheet when the prediction fails ("" when it holds): the wired
+    loop's verdict on the bench when it is not stable, and the scenarios held in under 95 % of runs."""
+    failing = [f"{p.scenario} {100 * p.fraction_held:.0f} %" for p in preds if p.fraction_held < PREDICTION_TARGET]
+    if loop.verdict == "stable" and not failing:
+        return ""
+    w = loop.worst
+    pole = f"{w.real:+.3g}" + (f" ± {abs(w.imag):.3g}j" if abs(w.imag) > 1e-9 else "")
+    cause = f", conserving {loop.conserved_text}" if loop.verdict == "marginal" and loop.conserved else ""
+    why = [] if loop.verdict == "stable" else [f"wired loop {loop.verdict} with the {loop.actuator} "
+                                               f"(pole {pole} 1/s{cause})"]
+    if failing:
+        why.append("held in " + ", ".join(failing) + " of runs")
+    return f"Predicted to fail on the {bench_id} bench: " + "; ".join(why) + ". See 'Predicted on the bench'."
 
 
 def predicted_patch_files(d: Design, machine: MachineProfile, bench: BenchProfile, net: Netlist,

@@ -53,15 +53,14 @@ def test_each_row_is_its_pot(net):
     # of 0.2 s as an integrator whose own output comes back through P1 at 0.5 on a x10 input (T/tau = 5)
     p4 = pot_rows(net)[3]
     assert (p4["setting"], p4["signal"], p4["weight"], p4["realized"]) == ("0.915", "theta", 10, "9.15")
-    p1 = pot_rows(net)[0]
-    assert (p1["setting"], p1["signal"], p1["amplifier"], p1["weight"], p1["realized"]) == (
-        "0.500", "actuator", "A1", 10, "-5")
+    own = next(r for r in pot_rows(net) if r["amplifier"] == "A1" and r["signal"] == "actuator")
+    assert (own["setting"], own["weight"], own["realized"]) == ("0.500", 10, "-5")
 
 
 def test_a_coefficient_of_zero_has_no_error_percentage(net):
     odd = _with_zero_coefficient(net)
     assert pot_rows(odd)[0]["error_pct"] == "inf"
-    assert "\nP1,0.500,actuator,A1,x10a,10,0,-5,inf,\n" in pots_csv(odd)
+    assert "\nP1,0.500,-u_c,A1,x10a,10,0,5,inf,\n" in pots_csv(odd)
     console = Console(file=io.StringIO(), width=200, record=True)
     console.print(pot_table(odd, GP6.procedure.pot_setting))
     p1 = next(line for line in console.export_text().splitlines() if "P1" in line)

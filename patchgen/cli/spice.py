@@ -20,7 +20,7 @@ from patchgen.patch.build import build_patch
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, write_files
 from patchgen.spice.compare import compare, comparison_plot
-from patchgen.spice.deck import SpiceSettings, spice_deck
+from patchgen.spice.deck import OPAMP_MODEL, SpiceSettings, spice_deck
 from patchgen.spice.run import NgspiceError, NgspiceMissing, run_ngspice
 
 from . import cli
@@ -30,6 +30,9 @@ from .options import SCENARIO, FiniteFloat, out_option
 SPICE_FILES = ("patch.cir", "patch.data", "comparison.json", "overlay.png", "overlay.svg")
 
 NO_NGSPICE_STATUS = NgspiceMissing.exit_status
+RECORD_EVERY_STEP_S = 1e-6  # a history interval below any engine step: the reference at every step
+STATISTICAL = ("the deck draws its own noise, random-force and drift samples (the same levels, another "
+               "realisation), so the runs differ by that; --ideal compares like with like")
 
 
 class _Own:
@@ -87,13 +90,16 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_js
         write_files(out_dir, files, force=force)
         click.echo(f"patchgen: ngspice failed: {exc}", err=True)
         sys.exit(NgspiceError.exit_status)
-    own = simulate(net, plant, bench, machine, scenario, ideal=ideal)
+    # the reference at every step of patchgen's own integrator, evaluated at ngspice's time points
+    every_step = scenario.model_copy(update={"record_dt_s": RECORD_EVERY_STEP_S})
+    own = simulate(net, plant, bench, machine, every_step, ideal=ideal)
     cmp = compare(sp, _Own(own.history))
     plots = plot_helper.submit(comparison_plot, cmp, "overlay", f"{d.spec.name}: ngspice vs "
                                f"patchgen ({scenario.name}{', ideal' if ideal else ''})", "patchgen", svg)
     files.update(plots.result())
     report = {"design": d.spec.name, "scenario": scenario.name, "ideal": ideal, "tolerance": tolerance,
-              "ngspice_run_time_s": sp.run_time_s,
+              "ngspice_run_time_s": sp.run_time_s, "compared_at": f"ngspice's {len(cmp.t)} time points",
+              "opamp_model": OPAMP_MODEL, "statistical": not ideal,
               "signals": {k: {"rms_rel": v.rms_rel, "max_rel": v.max_rel, "peak": v.peak}
                           for k, v in cmp.signals.items()},
               "agrees": cmp.agrees(tolerance)}
@@ -112,7 +118,11 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_js
         console = Console()
         console.print(t)
         console.print(("[green]agree[/green]" if report["agrees"] else "[red]disagree[/red]")
-                      + f" within {100 * tolerance:g} % of peak; ngspice ran {sp.run_time_s:.2f} s")
+                      + f" within {100 * tolerance:g} % of peak at ngspice's {len(cmp.t)} time points; "
+                      f"ngspice ran {sp.run_time_s:.2f} s")
+        console.print(f"op-amp model: {OPAMP_MODEL}")
+        if not ideal:
+            console.print(f"[yellow]not --ideal:[/yellow] {STATISTICAL}")
         console.print("wrote " + ", ".join(str(p) for p in written))
     if not report["agrees"]:
         sys.exit(1)

@@ -3,9 +3,11 @@
 patchgen's own simulator treats each amplifier as an ideal element. This module writes the patched
 circuit, read once by patchgen.patch.reading, as a circuit simulator sees it: every amplifier an
 inverting op-amp macromodel with finite open-loop gain, output resistance and a feedback bound that
-keeps its output within the saturation voltage; the machine's input resistor for each weight its
-profile declares, feedback resistors and capacitors; every pot a resistive divider loaded by the
-input resistor it feeds; noise and drift as patchgen's simulator takes them
+keeps its output within the saturation voltage (no gain-bandwidth or slew limit: OPAMP_MODEL); the
+machine's input resistor for each weight its profile declares, feedback resistors and capacitors,
+the external parts the netlist lists (patchgen.patch.parts); every pot a resistive divider loaded by
+the input resistor it feeds; noise, random forces on the plant and drift as patchgen's simulator
+takes them
 (patchgen.bench.noise_drift), drift as an offset voltage and a bias current. The sensors' constants
 are the bench's (patchgen.bench.circuit.sensor_constants), as in the simulator. The cart-pendulum
 and the actuator are behavioural sources (patchgen.spice.plant), so the whole loop runs in ngspice
@@ -42,12 +44,17 @@ from patchgen.spice.plant import (
     disturbances,
 )
 
+# What each amplifier's macromodel includes and leaves out (printed by patchgen spice)
+OPAMP_MODEL = ("finite open-loop DC gain, output resistance, a soft bound at the saturation voltage, the input "
+               "and feedback resistors and capacitors, loaded pots, drift as offset and bias; omitted: gain-"
+               "bandwidth and slew rate (the loop's motions are a few hertz, the differentiator's roll-off at most "
+               "a few hundred hertz: far below an op-amp's bandwidth), input capacitance and common-mode effects")
 DECK_NAME = "patch.cir"
 DATA_NAME = "patch.data"
 NOISE_NAME = "patch.noise"
 INSTALL_HINT = ("install ngspice (Debian/Ubuntu: apt-get install ngspice) and make sure `ngspice` "
                 "is on the PATH")
-__all__ = ["CONTROL_NODE", "FORCE_NODE", "STATE_NODES", "SpiceDeck", "SpiceSettings", "output_vectors",
+__all__ = ["CONTROL_NODE", "FORCE_NODE", "OPAMP_MODEL", "STATE_NODES", "SpiceDeck", "SpiceSettings", "output_vectors",
            "spice_deck"]
 
 

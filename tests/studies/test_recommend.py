@@ -279,3 +279,23 @@ def test_recommend_chooses_a_stable_loop_that_holds_every_shipped_scenario(name)
     # no loop that is not stable on the bench ranks above a stable one
     loops = [c.bench_loop == "stable" for c in rec.ranked if c.simulated]
     assert loops == sorted(loops, reverse=True)
+
+
+def test_the_dead_reduced_observer_loop_of_section_5_3_holds_nowhere():
+    """Section 5.3's gains with a reduced observer on two slaved units: the wired loop is unstable on
+    the bench, and no shipped scenario holds it, the disturbed two-minute hold included (an exactly
+    upright, undisturbed pendulum would have stood for any patch)."""
+    from patchgen.bench.diagnosis import diagnose
+
+    spec = load_spec("thesis-ch5")
+    spec = spec.model_copy(update={"estimator": spec.estimator.model_copy(
+        update={"kind": "reduced_observer", "rolloff_s": None})})
+    m = load_machine("gp6")
+    d = design_on(spec, m, BENCH)
+    net = build_patch(d, m, "auto")
+    assert net.units == 2
+    plant = plant_params(d.spec)
+    assert diagnose(net, plant, BENCH)[-1].verdict == "unstable"
+    for name in STANDARD:
+        r = simulate(net, plant, BENCH, m, load_scenario(name), runs=20, keep_history=False)
+        assert r.distribution.fraction_held == 0.0, name

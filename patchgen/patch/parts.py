@@ -13,7 +13,8 @@ behind its panel, and pots; what it lacks is patched with external parts:
   C = tau / R_f across its feedback, summing junction to output.
 
 Each part gets its nominal value and a stock fit: the nearest E96 resistor (1 % metal film; at
-most 1.2 % off), or one E12 capacitor or two in parallel (within 1 % where two can do it). The
+most 1.5 % off), or one E12 capacitor, or two in parallel when one is more than 1 % off (then
+within 2 %). The
 netlist's element values stay the design's; a fit's error and the parts' tolerance (machine
 profile ``components``) are stated beside them.
 """

@@ -88,11 +88,11 @@ def test_a_version_1_netlist_reads_and_gets_the_same_parts():
 @given(st.floats(1e-12, 1e9))
 def test_stock_fits_are_near_and_from_their_series(value):
     text, r = resistor_fit(value)
-    assert abs(math.log(r / value)) <= 0.5 * math.log(1.028) + 1e-12  # E96 neighbours: at most 2.8 % apart
+    assert abs(math.log(r / value)) <= 0.5 * math.log(1.031) + 1e-12  # E96 neighbours: at most 3.0 % apart
     m = r / 10 ** math.floor(math.log10(r) + 1e-9)
     assert any(math.isclose(m, e, rel_tol=1e-9) for e in E96) and text.endswith("(E96)")
     text, c = capacitor_fit(value)
-    assert abs(math.log(c / value)) <= math.log(1.1)  # one E12 within 10 %, two in parallel nearer
+    assert abs(math.log(c / value)) <= math.log(1.02)  # one E12 within 1 %, else two in parallel (measured: 1.7 %)
     if "in parallel" not in text:
         m = c / 10 ** math.floor(math.log10(c) + 1e-9)
         assert any(math.isclose(m, e, rel_tol=1e-9) for e in E12)

@@ -17,7 +17,7 @@ from .. import __version__
 # threads. Set before numpy loads; a user's own setting wins. The results are the same.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-COMMANDS = ("design", "patch", "simulate", "spice", "recommend", "swingup", "sweep", "examples")
+COMMANDS = ("design", "patch", "check", "simulate", "spice", "recommend", "swingup", "sweep", "examples")
 
 # The first sentence of each command's docstring, for `patchgen --help` without importing every
 # command (and so numpy, scipy, numba, matplotlib). tests/cli/test_cli_imports.py keeps them in step.
@@ -25,6 +25,7 @@ SUMMARIES = {
     "design": "Compute the LQR gain, Kalman estimator, loop transfer recovery and loop margins of SPEC.",
     "patch": "Scale SPEC's gains, allocate the machine and write the patch: netlist.json, pots.csv, "
              "patch-sheet.html, patch-sheet.md (with the bench prediction) and wiring.svg.",
+    "check": "Compare a filled static check with SPEC's patch and name the likeliest wrong pot, cord or sign.",
     "simulate": "Simulate SPEC's patched circuit (built from its netlist) on the bench.",
     "spice": "Export SPEC's patch and the bench as an ngspice deck, run it, and compare with patchgen's own "
              "simulation of the same scenario.",

@@ -189,18 +189,18 @@ def wire_list(net: Netlist) -> list[tuple[str, str]]:
                        None)
             if cap is not None and res is not None:  # a differentiator's input: capacitor, then series resistor
                 wires += [(src, f"{cap.id} ({cap.fit})"), (cap.id, f"{res.id} ({res.fit})"),
-                          (res.id, f"{a.id} summing junction (x{inp.weight} input resistor unused)")]
+                          (res.id, f"{a.id} summing junction")]
                 continue
             wires.append((src, f"{a.id} in {inp.jack} (x{inp.weight})"))
         for x in net.parts:
             if x.amplifier == a.id and x.jack is None:
                 wires.append((f"{x.id} ({x.fit})", f"across {a.id} feedback: summing junction to output"))
-    wires.append((_jack_name(net, net.output.source), "servo amplifier command input (u_c)"))
+    wires.append((_jack_name(net, net.output.source), "servo amplifier input (u_c)"))
     return wires
 
 
 def _jack_name(net: Netlist, source: str) -> str:
     for s in net.sensors:
         if s.id == source:
-            return f"sensor {s.id} ({s.label})"
+            return f"{s.id} sensor"
     return f"{source} out"

@@ -12,12 +12,13 @@ from collections.abc import Sequence
 from patchgen.design.lqg import Design
 from patchgen.design.margins import Margins
 from patchgen.patch.netlist import Netlist
+from patchgen.patch.static_check import StaticCheck, static_check, static_check_csv
 from patchgen.profiles.machine import MachineProfile
 from patchgen.render.diagram import wiring_svg
 from patchgen.render.pottable import pots_csv
 from patchgen.render.sheet import SheetSection, SheetSummary, render_sheet
 
-PATCH_FILES = ("netlist.json", "pots.csv", "wiring.svg", "patch-sheet.html", "patch-sheet.md")
+PATCH_FILES = ("netlist.json", "pots.csv", "static-check.csv", "wiring.svg", "patch-sheet.html", "patch-sheet.md")
 
 
 def sheet_summary(d: Design, sections: Sequence[SheetSection] = ()) -> SheetSummary:
@@ -44,6 +45,38 @@ def sheet_summary(d: Design, sections: Sequence[SheetSection] = ()) -> SheetSumm
     return SheetSummary(design=d.spec.name, description=d.spec.description, states=list(d.states),
                         K=[float(k) for k in d.K[0]], poles=list(d.closed_loop_poles), margins=margins,
                         estimator=kind, sections=list(sections))
+
+
+def static_section(check: StaticCheck, net: Netlist) -> SheetSection:
+    """The static check on the sheet: one row per amplifier (and u_c), a column per condition,
+    each cell the expected reading and its tolerance; the conditions and what the check leaves out
+    in the note (static-check.csv has a row per reading, with what each isolates)."""
+    names = [c.name for c in check.conditions]
+    cells = {(r.condition, r.point): f"{r.expected_V:+.3f} ± {r.tolerance_V:.3f}".replace("-", "−")
+             for r in check.readings}
+    points = [a.id for a in net.amplifiers] + ["u_c"]
+    rows = [[p if p != "u_c" else f"u_c ({net.output.source})", *(cells[(c, p)] for c in names)] for p in points]
+    setups = " ".join(_setup_lines(check))
+    left = (" Not seen by DC readings: " + "; ".join(check.unchecked) + ".") if check.unchecked else ""
+    note = (f"Expected reading ± tolerance (V). {setups}{left} Fill measured_V in static-check.csv, then "
+            "patchgen check SPEC --readings static-check.csv names the likeliest wrong pot, cord or sign.")
+    return SheetSection("Static check", ["amp", *names], rows, note)
+
+
+def _setup_lines(check: StaticCheck) -> list[str]:
+    """The conditions' set-ups, the one-sensor conditions in one sentence."""
+    out, single = [], [c for c in check.conditions if c.name.endswith(" only")]
+    for c in check.conditions:
+        if c in single[1:]:
+            continue
+        if c is (single[0] if single else None) and len(single) > 1:
+            volts = ", ".join(f"{next(iter(x.sensors_V.values())):g}" for x in single)
+            names = ", ".join(x.name.removesuffix(" only") for x in single)
+            out.append(f"{names} only: IC mode, integrators at 0, the other sensor inputs grounded, that input at "
+                       f"{volts} V ({'; '.join(x.source for x in single)}).")
+            continue
+        out.append(f"{c.name}: {c.setup}.")
+    return out
 
 
 def _margin_cells(m: Margins) -> dict[str, str]:
@@ -75,8 +108,9 @@ def patch_files(d: Design, machine: MachineProfile, net: Netlist,
     dict
         File name -> text, for :func:`patchgen.render.outputs.write_files`.
     """
-    files = {"netlist.json": net.to_json(), "pots.csv": pots_csv(net)}
+    check = static_check(net, machine)
+    files = {"netlist.json": net.to_json(), "pots.csv": pots_csv(net), "static-check.csv": static_check_csv(check)}
     svg = wiring_svg(net)
-    html, md = render_sheet(net, sheet_summary(d, sections), svg, machine.procedure)
+    html, md = render_sheet(net, sheet_summary(d, [*sections, static_section(check, net)]), svg, machine.procedure)
     files.update({"wiring.svg": svg, "patch-sheet.html": html, "patch-sheet.md": md})
     return files

@@ -135,7 +135,7 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
                for loop, figs in summary.margins.items()]
 
     # the diagram gets the room the extra sections leave on two printed pages
-    diagram_mm = 96 if len(summary.sections) <= 1 else 68
+    diagram_mm = {0: 96, 1: 96, 2: 68}.get(len(summary.sections), 50)
     return {
         "banners": [sec.banner for sec in summary.sections if sec.banner],
         "parts": parts,

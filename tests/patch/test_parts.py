@@ -42,7 +42,7 @@ def test_bench_recommended_differentiator_parts():
     assert (c.tolerance, r.tolerance) == (0.05, 0.01)
     # the wire list routes the cord through both parts, and the deck builds them at their values
     wires = wire_list(net)
-    assert ("sensor theta (pendulum angle pot)", "C1 (1 µF (E12))") in wires and ("C1", "R1 (6.34 kΩ (E96))") in wires
+    assert ("theta sensor", "C1 (1 µF (E12))") in wires and ("C1", "R1 (6.34 kΩ (E96))") in wires
     deck = spice_deck(net, d.spec.plant, load_bench("uw-1991"), GP6, SpiceSettings(1.0, 0.01, (0, 0.1, 0, 0)))
     assert "C_a5_x1a sens_theta a5_x1a_m 1e-06" in deck.text
     assert f"R_a5_x1a_s a5_x1a_m a5_sj {r.value:.6g}"[:34] in deck.text

@@ -57,7 +57,7 @@ def test_pot_error_against_the_design():
 def test_sheet_has_every_part_a_lab_needs():
     net, html, md = _render()
     for heading in ("Design summary", "Pot settings", "External parts", "Amplifier assignments", "Wire list",
-                    "Wiring diagram", "Procedure", "Initial conditions", "Predicted on the bench"):
+                    "Wiring diagram", "Procedure", "Predicted on the bench"):
         assert heading in html and f"## {heading}" in md
     # one procedure, in the machine's own words (the netlist's mode steps are not printed twice)
     assert "Mode and initial conditions" not in html and "Bench checklist" not in html

@@ -1,0 +1,65 @@
+"""`patchgen check SPEC --readings FILE`: a filled static check against the patch, and the likeliest
+fault when they differ."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from patchgen.design.lqg import design_on
+from patchgen.patch.build import build_patch
+from patchgen.patch.fault_finding import diagnose_readings, load_readings
+from patchgen.patch.static_check import static_check
+
+from . import cli
+from .inputs import load_inputs
+
+DISAGREE_STATUS = 1  # the readings point at a fault
+
+
+@cli.command("check")
+@click.argument("spec")
+@click.option("--readings", "readings_path", required=True, metavar="FILE",
+              help="static-check.csv as patchgen patch wrote it, with the measured_V column filled in.")
+@click.option("--json", "as_json", is_flag=True, help="Print the verdict and the faults as JSON.")
+def check_cmd(spec: str, readings_path: str, as_json: bool) -> None:
+    """Compare a filled static check with SPEC's patch and name the likeliest wrong pot, cord or sign.
+
+    Exit 0 when every reading agrees with its expected value within its tolerance, 1 when not
+    (with the single faults that explain the readings best, ranked), 2 for a bad readings file.
+    """
+    sp, machine, bench = load_inputs(spec)
+    net = build_patch(design_on(sp, machine, bench), machine)
+    check = static_check(net, machine)
+    measured = load_readings(readings_path, check)
+    verdict = diagnose_readings(net, machine, check, measured)
+    if as_json:
+        click.echo(json.dumps({
+            "design": net.design, "agree": verdict.agree, "mismatched": list(verdict.mismatched),
+            "faults": [{"kind": f.kind, "description": f.description, "chi_square": f.score,
+                        "explained": f.explained, "of": f.of, "consistent": f.consistent} for f in verdict.faults]},
+            indent=2, sort_keys=True, allow_nan=False))
+    else:
+        console = Console()
+        if verdict.agree:
+            console.print(f"[green]all {len(check.readings)} readings agree[/green] with {net.design}'s patch "
+                          "within their tolerances")
+        else:
+            console.print(f"[red]{len(verdict.mismatched)} of {len(check.readings)} readings disagree[/red]: "
+                          + escape(", ".join(verdict.mismatched)))
+            t = Table(title="Likeliest faults (one at a time), best first", title_justify="left")
+            for col in ("rank", "fault", "explains", "chi-square"):
+                t.add_column(col, justify="left" if col == "fault" else "right")
+            for k, f in enumerate(verdict.faults, 1):
+                t.add_row(str(k), escape(f.description), f"{f.explained} of {f.of}", f"{f.score:.3g}")
+            console.print(t)
+            if sum(f.consistent for f in verdict.faults) > 1:
+                console.print("[yellow]more than one fault explains every reading:[/yellow] the static check cannot "
+                              "tell them apart; check each in turn")
+    if not verdict.agree:
+        sys.exit(DISAGREE_STATUS)

@@ -11,16 +11,18 @@ then the first in a fixed order), so the result is deterministic.
 
 Coefficient magnitudes go on the smallest input weight w (the profile's, e.g. x1 and x10) with
 |c| <= w * pot_max, through a pot set to |c|/w; a coefficient equal to a weight needs no pot; one
-above the largest weight is an error.
+above the largest weight is split across inputs or carried by a gain stage
+(patchgen.patch.large_gains), an error only when neither fits.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from patchgen.inputs.errors import ResourceError
+from patchgen.patch import large_gains
 from patchgen.patch.netlist import AmpInput, Amplifier, ControlOutput, Netlist, Pot, SensorInput, Signal
 from patchgen.patch.realization import SENSOR_LABELS, SENSOR_UNITS, Block, Realization, Term
 from patchgen.profiles.machine import MachineProfile
@@ -41,6 +43,8 @@ class _Stage:
     out_polarity: int
     block: Block | None
 
+
+_JACKS = "inputs, has"  # what a shortfall of input jacks says (see _emit)
 
 # a coefficient this small beside its block's largest is rounding noise of the design's linear
 # algebra (double precision carries about 16 digits; a few products lose a few), not a gain
@@ -149,8 +153,36 @@ def _search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachinePr
 
 
 def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>") -> Netlist:
-    """Place the realization on the machine; a shortfall raises ResourceError (one line)."""
+    """Place the realization on the machine; a shortfall raises ResourceError (one line).
+
+    A coefficient above the largest input weight is split across inputs, else carried by a gain
+    stage (patchgen.patch.large_gains); only when neither fits is it the error.
+    """
     blocks, kept, notes, too_big = _plan_terms(real, machine)
+    if not too_big:
+        return _place(real, blocks, kept, notes, machine, source)
+    big = [t for ts in kept.values() for t in ts if large_gains.too_big(t, machine)]
+    split = {b: large_gains.split_terms(ts, machine) for b, ts in kept.items()}
+    top = large_gains.top_gain(machine)
+    how = [f"{t.signal}: coefficient {t.coeff:.4g} split across {math.ceil(abs(t.coeff) / top)} inputs of the "
+           "same amplifier" for t in big]
+    try:
+        return _place(real, blocks, split, notes + how, machine, source)
+    except ResourceError as exc:
+        if _JACKS not in exc.message:  # short of amplifiers or pots already: a gain stage only adds to that
+            raise
+    stages, staged, stage_notes = large_gains.gain_stages(real, kept, machine)
+    try:
+        return _place(replace(real, blocks=tuple(stages) + real.blocks), stages + blocks, staged, notes + stage_notes,
+                      machine, source)
+    except ResourceError:
+        raise ResourceError(source, "machine", too_big[0] + f" ({len(too_big)} such coefficients), and neither a "
+                            "second input nor a gain stage fits the machine") from None
+
+
+def _place(real: Realization, blocks: list[Block], kept: dict[str, list[Term]], notes: list[str],
+           machine: MachineProfile, source: str) -> Netlist:
+    """Polarities, inverters and pre-summers for the blocks' terms, then the amplifiers and pots."""
     _check_lower_bound(blocks, kept, machine, source)
     P, inverted, pre = _search(blocks, kept, machine)
     inverted = _unit_inverters(blocks, kept, P, inverted, pre, machine)
@@ -176,8 +208,6 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
     for sig in sorted(inverted):
         stages.insert(0, _Stage(f"inv:{sig}", "inverter", ((sig, None, 1.0),), sig, -P.get(sig, 1), None))
     _check_resources(stages, machine, source)
-    if too_big:
-        raise ResourceError(source, "machine", too_big[0] + f" ({len(too_big)} such coefficients)")
     return _emit(real, machine, stages, P, notes, wanted)
 
 

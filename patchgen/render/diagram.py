@@ -54,9 +54,23 @@ from patchgen.render.schematic import (
 # Drawing
 
 
-def wiring_svg(netlist: Netlist) -> str:
-    """The wiring diagram of ``netlist`` as an SVG document (same netlist -> same bytes)."""
-    _level, places, nets, n_rows, out_stage, out_row, slots = place(netlist)
+def wiring_svg(netlist: Netlist, outputs: list[tuple[str, str, list[str]]] | None = None,
+               terminals: dict[str, tuple[str, list[str]]] | None = None) -> str:
+    """The wiring diagram of ``netlist`` as an SVG document (same netlist -> same bytes).
+
+    Parameters
+    ----------
+    netlist : Netlist
+        The patch (or one unit of it, patchgen.render.diagram_units).
+    outputs : list of (amplifier id, name, detail lines), optional
+        The terminals on the right (default: u_c to the servo amplifier).
+    terminals : dict, optional
+        Names and detail lines of input terminals by source id (default: each sensor's).
+    """
+    outputs = outputs or [(netlist.output.source, "u_c",
+                           ["to the servo amplifier", f"{netlist.output.K_U_N_per_V:g} N/V"])]
+    terminals = terminals or {}
+    _level, places, nets, n_rows, out_stage, out_rows, slots = place(netlist, [o[0] for o in outputs])
     pots = {p.id: p for p in netlist.pots}
 
     # Vertical geometry: gaps (with their lanes) and rows, top to bottom.
@@ -103,9 +117,11 @@ def wiring_svg(netlist: Netlist) -> str:
             break
         a_left = left + (POT_LEAD + 2 * pot_r + POT_TO_AMP if stage_pots[stage] else AMP_LEAD)
         amp_left[stage] = a_left
+        # each output lead long enough for what it carries, written on it
         widths = [amp_width(p.amp.role, p.half, p.amp.id, pin_weights(p.amp))
+                  + max(OUT_LEAD, text_width(signed_label(p.amp.carries.polarity, p.amp.carries.quantity), 8) + 0.3)
                   for p in places.values() if p.stage == stage]
-        stage_right.append(a_left + max(widths, default=0.0) + OUT_LEAD)
+        stage_right.append(a_left + max(widths, default=0.0))
 
     d = _Drawing(canvas="svg", show=False)
     d.config(fontsize=8, font=FONT, lw=WIRE_LW, margin=0.15)
@@ -119,8 +135,8 @@ def wiring_svg(netlist: Netlist) -> str:
     for s in netlist.sensors:
         y = row_y[nets[s.id].row]
         unit = f"({s.unit})" if ("/" in s.unit or " " in s.unit) else s.unit
-        details = [s.label, f"{s.volts_per_unit:g} V/{unit}"]
-        d.add(Terminal(quantity_label(s.quantity), details, "left").at((0, y)))
+        name, details = terminals.get(s.id, (quantity_label(s.quantity), [s.label, f"{s.volts_per_unit:g} V/{unit}"]))
+        d.add(Terminal(name, details, "left").at((0, y)))
         d.extent(-0.15 - max(text_width(t, 6.5) for t in details), y)
 
     # Amplifiers, their pots and input leads.
@@ -136,6 +152,10 @@ def wiring_svg(netlist: Netlist) -> str:
         wire(a.id, (x_out, yc), (stage_right[p.stage], yc))
         d.add(Text(signed_label(a.carries.polarity, a.carries.quantity), 8,
                    ("center", "bottom")).at(((x_out + stage_right[p.stage]) / 2 - 0.05, yc + 0.05)))
+        across = [x for x in netlist.parts if x.amplifier == a.id and x.jack is None]
+        if across:  # a capacitor across the feedback (a lag built as a summer)
+            d.add(Text(" + ".join(f"{x.id} {x.fit.split(' (')[0]} across feedback" for x in across), 6,
+                       ("left", "top")).at((xa, yc - p.half - 0.06)))
         if a.role in ("integrator", "lag"):
             xi = xa + INT_BOX / 2
             wire(a.id + ".ic", (xi, yc + p.half), (xi, yc + p.half + 0.22))
@@ -152,13 +172,17 @@ def wiring_svg(netlist: Netlist) -> str:
                            ("center", "bottom")).at(((xp + 2 * pot_r + xa) / 2, y + 0.04)))
             if a.role == "differentiator":
                 d.add(Capacitor().at((xa - 0.22, y)))
+        fitted = [x for x in netlist.parts if x.amplifier == a.id and x.jack is not None]
+        if fitted:  # a differentiator's external parts, named as the parts list names them, above it
+            d.add(Text(", ".join(f"{x.id} {x.fit.split(' (')[0]}" for x in fitted), 6,
+                       ("left", "bottom")).at((xa, yc + p.half + 0.06)))
 
     # Output.
     xo = stage_left[out_stage] + 0.1
-    yo = row_y[out_row]
-    details = ["to the servo amplifier", f"{netlist.output.K_U_N_per_V:g} N/V"]
-    d.add(Terminal("u_c", details, "right").at((xo, yo)))
-    d.extent(xo + 0.15 + max(text_width(t, 6.5) for t in details), yo)
+    for (_, name, details), row in zip(outputs, out_rows):
+        yo = row_y[row]
+        d.add(Terminal(name, details, "right").at((xo, yo)))
+        d.extent(xo + 0.15 + max([text_width(name, 10)] + [text_width(t, 6.5) for t in details]), yo)
 
     # Nets: stubs, tracks, lanes.
     for k, n in nets.items():

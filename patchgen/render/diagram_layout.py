@@ -46,8 +46,10 @@ class Net:
     lanes: list[tuple[int, int, tuple]] = field(default_factory=list)  # (ch_from, ch_to, ykey)
 
 
-def place(net: Netlist):
-    """Stages, rows, tracks and lanes of every part of a netlist's diagram, in index space."""
+def place(net: Netlist, outputs: list[str] | None = None):
+    """Stages, rows, tracks and lanes of every part of a netlist's diagram, in index space.
+    ``outputs``: the amplifiers drawn as terminals on the right (default: the control output)."""
+    outputs = outputs or [net.output.source]
     level = read(net).levels()
     sensors = [s.id for s in net.sensors]
     n_stages = max([level[a.id] for a in net.amplifiers], default=0) + 2  # + sensors + output
@@ -81,11 +83,14 @@ def place(net: Netlist):
             occupant[stage][row] = a.id
             nxt = row + 1
             places[a.id] = AmpPlace(a, stage, row, pins, amp_half_height(len(a.inputs)))
-    out_row = row_of.get(net.output.source, 0)
     last = occupant[out_stage - 1]
-    while last.get(out_row, net.output.source) != net.output.source:
-        out_row += 1
-    n_rows = max(list(row_of.values()) + [out_row]) + 1
+    out_rows: list[int] = []
+    for src in outputs:
+        out_row = row_of.get(src, 0)
+        while last.get(out_row, src) != src or out_row in out_rows:
+            out_row += 1
+        out_rows.append(out_row)
+    n_rows = max(list(row_of.values()) + out_rows) + 1
 
     def pin_offset(p: AmpPlace, j: int) -> float:
         i = p.pins.index(j)
@@ -102,7 +107,8 @@ def place(net: Netlist):
             off = pin_offset(p, j)
             target = ("pot", inp.pot) if inp.pot else ("amp", a.id, off)
             nets[inp.source].sinks.append(Sink(p.stage, ("row", p.row, off), target))
-    nets[net.output.source].sinks.append(Sink(out_stage, ("row", out_row, 0.0), ("out",)))
+    for k, (src, row) in enumerate(zip(outputs, out_rows)):
+        nets[src].sinks.append(Sink(out_stage, ("row", row, 0.0), ("out", k)))
 
     # Tracks and lanes.
     lane_use: dict[tuple[int, int], list[tuple[int, int]]] = {}  # (gap, slot) -> channel spans
@@ -139,7 +145,7 @@ def place(net: Netlist):
             n.lanes.append((n.stage, ch, key))
     slots = [1 + max([s for (g, s) in lane_use if g == gap], default=-1)
              for gap in range(n_rows + 1)]
-    return level, places, nets, n_rows, out_stage, out_row, slots
+    return level, places, nets, n_rows, out_stage, out_rows, slots
 
 
 def track_order(nets: dict[str, Net], channel: int) -> list[str]:

@@ -32,7 +32,18 @@ _GREEK = {"theta": "θ", "phi": "φ", "alpha": "α", "omega": "ω"}
 
 
 def quantity_label(q: str) -> str:
-    """Readable name of a state or signal: theta_dot -> θ̇, int_theta -> ∫θ, xhat_s -> ŝ."""
+    """Readable name of a state or signal: theta_dot -> θ̇, int_theta -> ∫θ, xhat_s -> ŝ,
+    z_theta_dot -> z(θ̇), what_theta_dot -> ŵ(θ̇), theta_x1.48 -> 1.48·θ, partial u_c -> partial u_c.
+    A combining dot or hat goes on a one-letter symbol only (on a longer name it would land on its
+    last letter: theta_dot is θ̇, never thetȧ)."""
+    if " " in q:  # "partial u_c": each word on its own
+        return " ".join(quantity_label(w) for w in q.split(" "))
+    for prefix, name in (("z_", "z"), ("what_", "ŵ")):
+        if q.startswith(prefix):
+            return f"{name}({quantity_label(q[len(prefix):])})"
+    stage = q.rsplit("_x", 1)
+    if len(stage) == 2 and stage[1].replace(".", "", 1).isdigit():
+        return f"{stage[1]}·{quantity_label(stage[0])}"
     hat = ""
     if q.startswith("xhat_"):
         q, hat = q[5:], "\u0302"
@@ -43,6 +54,9 @@ def quantity_label(q: str) -> str:
     if q.startswith("int_"):
         q, integral = q[4:], "∫"
     base = _GREEK.get(q, q)
+    if len(base) > 1 and (dot or hat):  # a mark would sit on the last letter: write it out
+        name = f"d{base}/dt" if dot else base
+        return f"{integral}{'est. ' if hat else ''}{name}"
     return f"{integral}{base}{hat}{dot}"
 
 
@@ -121,10 +135,10 @@ class Terminal(Element):
         self.segments.append(SegmentCircle((0, 0), 0.07, lw=SYMBOL_LW, fill="white", zorder=4))
         sign = -1 if side == "left" else 1
         align = "right" if side == "left" else "left"
-        self.segments.append(SegmentText((sign * 0.15, 0.02), name, fontsize=10, font=FONT,
+        self.segments.append(SegmentText((sign * 0.15, 0.06), name, fontsize=10, font=FONT,
                                          align=(align, "bottom")))
         for i, line in enumerate(details):
-            self.segments.append(SegmentText((sign * 0.15, -0.03 - i * 0.22), line, fontsize=6.5,
+            self.segments.append(SegmentText((sign * 0.15, -0.08 - i * 0.22), line, fontsize=6.5,
                                              font=FONT, align=(align, "top")))
 
 

@@ -15,6 +15,7 @@ from patchgen.patch.netlist import Netlist
 from patchgen.patch.static_check import StaticCheck, static_check, static_check_csv
 from patchgen.profiles.machine import MachineProfile
 from patchgen.render.diagram import wiring_svg
+from patchgen.render.diagram_units import diagram_pages
 from patchgen.render.pottable import pots_csv
 from patchgen.render.sheet import SheetSection, SheetSummary, render_sheet
 
@@ -111,6 +112,7 @@ def patch_files(d: Design, machine: MachineProfile, net: Netlist,
     check = static_check(net, machine)
     files = {"netlist.json": net.to_json(), "pots.csv": pots_csv(net), "static-check.csv": static_check_csv(check)}
     svg = wiring_svg(net)
-    html, md = render_sheet(net, sheet_summary(d, [*sections, static_section(check, net)]), svg, machine.procedure)
+    html, md = render_sheet(net, sheet_summary(d, [*sections, static_section(check, net)]), diagram_pages(net),
+                            machine.procedure)
     files.update({"wiring.svg": svg, "patch-sheet.html": html, "patch-sheet.md": md})
     return files

@@ -50,7 +50,8 @@ class SheetSummary:
     sections: list[SheetSection] = field(default_factory=list)
 
 
-def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str, procedure: Procedure) -> tuple[str, str]:
+def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[str, str]],
+                 procedure: Procedure) -> tuple[str, str]:
     """The patch sheet as (HTML, Markdown).
 
     Parameters
@@ -59,14 +60,16 @@ def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str, procedure: P
         The patch.
     summary : SheetSummary
         The design beside it: gains, poles, margins, extra sections.
-    svg : str
-        The wiring diagram, inlined in the HTML.
+    svg : str or list of (str, str)
+        The wiring diagram, inlined in the HTML; or several, each with its caption (a patch on
+        slaved units: one per unit, patchgen.render.diagram_units).
     procedure : Procedure
         The machine profile's procedure: the bench checklist in the machine's own words.
     """
     ctx = sheet_context(netlist, summary, procedure)
+    figures = [("", svg)] if isinstance(svg, str) else svg
     html = _env(autoescape=True).get_template("patch-sheet.html.j2").render(
-        **ctx, svg=_inline_svg(svg))
+        **ctx, figures=[(caption, _inline_svg(body)) for caption, body in figures])
     md = _env(autoescape=False).get_template("patch-sheet.md.j2").render(**ctx)
     return _end(html), _end(md)
 
@@ -135,7 +138,7 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
                for loop, figs in summary.margins.items()]
 
     # the diagram gets the room the extra sections leave on two printed pages
-    diagram_mm = {0: 96, 1: 96, 2: 68}.get(len(summary.sections), 50)
+    diagram_mm = {0: 96, 1: 96, 2: 68}.get(len(summary.sections), 46)
     return {
         "banners": [sec.banner for sec in summary.sections if sec.banner],
         "parts": parts,

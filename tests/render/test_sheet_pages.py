@@ -1,5 +1,7 @@
 """The sheets patchgen writes (with their bench prediction) print on at most two pages."""
 
+import json
+import re
 import shutil
 import subprocess
 import sys
@@ -37,3 +39,38 @@ def test_written_sheet_fits_two_pages(tmp_path, args):
     assert 1 <= pages <= 2
     assert all(w <= 210 * MM + 0.5 and h <= 279.4 * MM + 0.5 for w, h in boxes)
     assert "Predicted on the bench" in (out / "patch-sheet.html").read_text()
+
+
+def _variant(tmp_path, name, **changes):
+    """A shipped design with some lines changed, written as a spec file."""
+    text = (ROOT / "patchgen" / "designs" / f"{name}.toml").read_text()
+    for old, new in changes.items():
+        text = text.replace(old.replace("__", " "), new)
+    path = tmp_path / f"{name}-variant.toml"
+    path.write_text(text)
+    return str(path)
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
+@pytest.mark.parametrize("name", ["thesis-ch5", "bench-recommended"])
+def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_path, name):
+    that = _variant(tmp_path, name, **{'machine__=__"gp6"': 'machine = "the-analog-thing"'})
+    two = tmp_path / "two.toml"
+    text = (ROOT / "patchgen" / "designs" / f"{name}.toml").read_text()
+    text = re.sub(r'kind = "\w*differentiator"', 'kind = "reduced_observer"', text)
+    text = re.sub(r"rolloff_s = [^\n]*\n", "", text)
+    text = text.replace("[patch]\n", '[patch]\nunits = "auto"\n') if "[patch]" in text else (
+        text + '\n[patch]\nunits = "auto"\n')
+    two.write_text(text)
+    for spec, most in ((that, 2), (str(two), 3)):
+        out = tmp_path / f"out-{most}"
+        r = subprocess.run([sys.executable, "-m", "patchgen", "patch", spec, "--runs", "4", "-o", str(out)],
+                           capture_output=True, text=True, cwd=ROOT)
+        assert r.returncode == 0, r.stderr
+        pages, _ = print_pages(out / "patch-sheet.html", tmp_path)
+        assert 1 <= pages <= most, (spec, pages)
+        html = (out / "patch-sheet.html").read_text()
+        assert "Static check" in html and (out / "static-check.csv").stat().st_size > 0
+        if most == 3:  # a diagram per unit that holds amplifiers (thesis-ch5's second unit lends only pots)
+            units = {a["id"].split(".")[0] for a in json.loads((out / "netlist.json").read_text())["amplifiers"]}
+            assert all(f"Unit {u[1:]} of 2" in html for u in units) and units

@@ -78,7 +78,8 @@ class Reading:
     def path_sign(self, amp_id: str) -> int | None:
         """Sign of u_c per volt entering ``amp_id``: one inversion per amplifier to the output.
 
-        None when the amplifier reaches the output by no path or by more than one.
+        None when the amplifier reaches the output by no path or by more than one. Several inputs
+        of one amplifier from the same source (a coefficient split across inputs) are one path.
         """
         feeds = self.fed_by()
         paths: list[int] = []
@@ -89,7 +90,7 @@ class Reading:
             if node == self.output:
                 paths.append(depth)
                 return
-            for nxt in feeds.get(node, []):
+            for nxt in dict.fromkeys(feeds.get(node, [])):
                 if nxt not in seen:
                     walk(nxt, depth + 1, seen | {nxt})
 

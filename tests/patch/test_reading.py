@@ -56,6 +56,10 @@ def test_path_sign_counts_the_inversions_to_the_output():
         _amp(d, "A1")["inputs"].append({"source": "A6", "weight": 1, "jack": "x1b"})
     assert read(_net(second_path)).path_sign("A6") is None
 
+    def split_input(d):  # A1 feeds A7 through a second input too (a coefficient split): still one path
+        _amp(d, "A7")["inputs"].append({"source": "A1", "weight": 10, "jack": "x10b"})
+    assert read(_net(split_input)).path_sign("A1") == 1
+
 
 def test_levels_place_each_amplifier_after_its_latest_source():
     lv = read(_net()).levels()

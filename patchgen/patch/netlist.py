@@ -21,6 +21,7 @@ quantity``, so a reader can check every sign.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Literal
 
@@ -176,7 +177,7 @@ def json_schema() -> dict:
 def wire_list(net: Netlist) -> list[tuple[str, str]]:
     """Every patch cord as (from, to), in a stable order: pots fed first, then amplifier inputs (a
     differentiator's through its external capacitor and series resistor), then parts across a
-    feedback."""
+    feedback; on slaved units, grouped by the unit each cord ends on."""
     wires: list[tuple[str, str]] = []
     for p in net.pots:
         wires.append((_jack_name(net, p.source), f"{p.id} top"))
@@ -196,7 +197,16 @@ def wire_list(net: Netlist) -> list[tuple[str, str]]:
             if x.amplifier == a.id and x.jack is None:
                 wires.append((f"{x.id} ({x.fit})", f"across {a.id} feedback: summing junction to output"))
     wires.append((_jack_name(net, net.output.source), "servo amplifier input (u_c)"))
+    if net.units > 1:  # slaved units: each unit's cords together, in the order above
+        wires.sort(key=lambda w: _unit(w[1]))
     return wires
+
+
+def _unit(end: str) -> int:
+    """The unit a cord ends on (U2.P3 top, across U1.A4 feedback: 2, 1); after every unit for the
+    servo amplifier."""
+    m = re.search(r"\bU(\d+)\.", end)
+    return int(m.group(1)) if m else 1_000
 
 
 def _jack_name(net: Netlist, source: str) -> str:

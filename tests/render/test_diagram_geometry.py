@@ -79,3 +79,13 @@ def test_a_two_unit_patch_is_drawn_unit_by_unit():
         others = shown - mine  # other units' amplifiers appear only as the terminals of the links
         assert all(o in caption for o in others)
     assert len(diagram_pages(_net("thesis-ch5"))) == 1
+
+
+def test_a_two_unit_wire_list_keeps_each_units_cords_together():
+    import re as _re
+
+    from patchgen.patch.netlist import wire_list
+
+    net = CASES["bench-recommended-2-units"]()
+    units = [int(m.group(1)) if (m := _re.search(r"\bU(\d+)\.", to)) else 99 for _, to in wire_list(net)]
+    assert units == sorted(units) and units[-1] == 99  # unit 1, unit 2, then the servo command

@@ -14,6 +14,7 @@ summers, inverters and differentiators pass their present input through.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 from patchgen.inputs.errors import InputError
@@ -100,18 +101,38 @@ class Reading:
         return -1 if paths[0] % 2 else 1
 
     def levels(self) -> dict[str, int]:
-        """Stage of each sensor (0) and amplifier: one after its latest source, feedback loops
-        broken in netlist order at the first integrator (the wiring diagram's columns)."""
-        level: dict[str, int] = {s: 0 for s in self.sensors}
-        remaining = list(self.amplifiers.values())
-        while remaining:
-            ready = [a for a in remaining if all(f.source in level or f.source == a.id for f in a.feeds)]
-            pick = ready if ready else [next((a for a in remaining if a.role == "integrator"), remaining[0])]
-            for a in pick:
-                placed = [level[f.source] for f in a.feeds if f.source in level]
-                level[a.id] = 1 + max(placed, default=0)
-            remaining = [a for a in remaining if a.id not in level]
-        return level
+        """Stage of each sensor (0) and amplifier: the wiring diagram's columns (:func:`stage_levels`)."""
+        return stage_levels(self.sensors, [(a.id, a.role, [f.source for f in a.feeds])
+                                           for a in self.amplifiers.values()])
+
+
+def stage_levels(sources: Iterable[str], amplifiers: Iterable[tuple[str, str, Iterable[str]]]) -> dict[str, int]:
+    """Stage of each source and amplifier in a wiring diagram, as an analog computer is drawn.
+
+    Parameters
+    ----------
+    sources : iterable of str
+        Signals entering the diagram (sensors, or signals from another unit): stage 0.
+    amplifiers : iterable of (id, role, source ids)
+        In netlist order.
+
+    Returns
+    -------
+    dict of str to int
+        Integrators and lags (their outputs are states, fed back as a patch needs) at stage 1; a
+        feed-through amplifier one after its latest source. A ring of feed-through amplifiers (which
+        :func:`read` refuses) is broken in netlist order.
+    """
+    level: dict[str, int] = {s: 0 for s in sources}
+    amps = [(aid, role, [s for s in srcs if s != aid]) for aid, role, srcs in amplifiers]
+    level.update({aid: 1 for aid, role, _ in amps if role in STATEFUL})
+    remaining = [a for a in amps if a[1] not in STATEFUL]
+    while remaining:
+        ready = [a for a in remaining if all(s in level for s in a[2])] or remaining[:1]
+        for aid, _, srcs in ready:
+            level[aid] = 1 + max([level[s] for s in srcs if s in level], default=0)
+        remaining = [a for a in remaining if a[0] not in level]
+    return level
 
 
 def read(net: Netlist, default_rolloff_s: float | None = None) -> Reading:

@@ -2,223 +2,286 @@
 
 Drawn with schemdraw's SVG backend and a few custom elements: an inverting amplifier is a
 triangle with the weight of each input (1 or 10) written inside beside it; an integrator has a
-rectangle on its input side and its IC input on top; a differentiator has a capacitor at each
-input and is marked d/dt; a coefficient pot is a circle with its id, its setting written on the
-wire it feeds. Sensors are named on the left, the control voltage u_c on the right.
+rectangle on its input side (holding the weights) and its IC input on top; a differentiator is
+marked d/dt and has its external capacitor and series resistor on each input; a lag patched as a
+summer has its external capacitor across its feedback, drawn over it; an amplifier fed back from
+its own output (a lag built from an integrator and a pot) has that loop drawn over it, from its
+output back through the pot to its input. A coefficient pot is a circle with its id, its setting
+written on the wire it feeds; an external part is labelled with its id above and its value below.
+Sensors are named on the left, the control voltage u_c on the right; on a diagram of one unit of
+slaved units, a flag stands for a cord to or from another unit, named for the jack at its other
+end.
 
-Layout is by stages, left to right: the sensors, then for each level of amplifiers (an amplifier
-sits one level after its latest source) a column of pots and a column of amplifiers, then the
-output. Wires run on vertical tracks in the channels between stages; a wire that skips a stage
-or feeds back runs along a lane between rows, which no element occupies. Everything is computed
-from the netlist alone, in a fixed order, so the same netlist gives the same bytes.
+Layout is by stages, left to right (patchgen.render.diagram_layout), and every label has room of
+its own (patchgen.render.diagram_geometry). Everything is computed from the netlist alone, in a
+fixed order, so the same netlist gives the same bytes.
 """
 
 from __future__ import annotations
 
 from patchgen.patch.netlist import Netlist
-from patchgen.render.diagram_layout import place, track_order
+from patchgen.render.diagram_geometry import (
+    IC_STUB,
+    LABEL_CLEAR,
+    Geometry,
+    lead_label_x,
+    lead_lines,
+    loop_right_x,
+    loops_of,
+    measure,
+    name_pt,
+)
+from patchgen.render.diagram_graph import Block, Graph, unit_graph, unit_of, units, whole_graph
+from patchgen.render.diagram_layout import Layout, place
 from patchgen.render.diagram_symbols import (
-    AMP_LEAD,
+    ASCENT,
+    DESCENT,
+    FLAG,
     FONT,
-    INT_BOX,
-    LANE_PITCH,
-    OUT_LEAD,
-    PIN_PITCH,
-    POT_LEAD,
-    POT_TO_AMP,
-    ROW_GAP,
-    SENSOR_PAD,
-    TRACK_PITCH,
+    GAP,
+    LEAD,
+    LOOP_PITCH,
+    PLATE,
+    PT,
+    RESISTOR,
+    SIGNAL_PT,
+    SMALL_PT,
+    TERMINAL_R,
     WIRE_LW,
     AmplifierSymbol,
     Capacitor,
+    Connector,
     Dot,
+    Label,
     PotSymbol,
+    Resistor,
     Terminal,
-    Text,
-    amp_width,
-    dial_decimals,
-    pin_weights,
-    pot_radius,
-    quantity_label,
-    signed_label,
-    text_width,
+    line_pitch,
+    text_box,
 )
-from patchgen.render.schematic import (
-    Line,
-    schemdraw,
-    svg_backend,
-)
-
-# ----------------------------------------------------------------------------------------------
-# Drawing
+from patchgen.render.schematic import Line, schemdraw, svg_backend
 
 
-def wiring_svg(netlist: Netlist, outputs: list[tuple[str, str, list[str]]] | None = None,
-               terminals: dict[str, tuple[str, list[str]]] | None = None) -> str:
-    """The wiring diagram of ``netlist`` as an SVG document (same netlist -> same bytes).
+def wiring_svg(netlist: Netlist) -> str:
+    """The wiring diagram of the whole patch as an SVG document.
 
     Parameters
     ----------
     netlist : Netlist
-        The patch (or one unit of it, patchgen.render.diagram_units).
-    outputs : list of (amplifier id, name, detail lines), optional
-        The terminals on the right (default: u_c to the servo amplifier).
-    terminals : dict, optional
-        Names and detail lines of input terminals by source id (default: each sensor's).
+        The patch.
+
+    Returns
+    -------
+    str
+        SVG text: every sensor, amplifier, pot and external part, and the control voltage; the
+        same netlist gives the same bytes.
     """
-    outputs = outputs or [(netlist.output.source, "u_c",
-                           ["to the servo amplifier", f"{netlist.output.K_U_N_per_V:g} N/V"])]
-    terminals = terminals or {}
-    _level, places, nets, n_rows, out_stage, out_rows, slots = place(netlist, [o[0] for o in outputs])
-    pots = {p.id: p for p in netlist.pots}
+    return graph_svg(whole_graph(netlist))
 
-    # Vertical geometry: gaps (with their lanes) and rows, top to bottom.
-    up = [SENSOR_PAD] * n_rows
-    down = [SENSOR_PAD] * n_rows
-    for p in places.values():
-        top = p.half + (0.55 if p.amp.role in ("integrator", "lag") else 0.12)
-        up[p.row] = max(up[p.row], top)
-        down[p.row] = max(down[p.row], p.half + 0.12)
-    row_y: list[float] = []
-    lane_y: dict[tuple[int, int], float] = {}
-    cursor = 0.0
-    for gap in range(n_rows + 1):
-        inner = ROW_GAP if 0 < gap < n_rows else 0.0
-        for s in range(slots[gap]):
-            lane_y[(gap, s)] = cursor - inner / 2 - (s + 0.5) * LANE_PITCH
-        cursor -= inner + slots[gap] * LANE_PITCH
-        if gap < n_rows:
-            row_y.append(cursor - up[gap])
-            cursor -= up[gap] + down[gap]
 
-    def y_of(key: tuple) -> float:
-        if key[0] == "row":
-            return row_y[key[1]] + key[2] * PIN_PITCH
-        return lane_y[(key[1], key[2])]
+def diagram_pages(net: Netlist) -> list[tuple[str, str]]:
+    """The wiring diagrams a patch sheet prints: one for a patch on one machine, one per unit for
+    a patch on slaved units.
 
-    # Horizontal geometry: stages and channels.
-    pot_r = pot_radius(netlist)
-    stage_pots = {s: any(i.pot for p in places.values() if p.stage == s for i in p.amp.inputs)
-                  for s in range(1, out_stage)}
-    order = {ch: track_order(nets, ch) for ch in range(out_stage)}
-    stage_left: list[float] = [0.0]
-    stage_right: list[float] = [0.0]    # sensor terminals at x = 0
-    amp_left: dict[int, float] = {}
-    chan_x: dict[tuple[int, str], float] = {}
-    for stage in range(1, out_stage + 1):
-        ch = stage - 1
-        for i, k in enumerate(order[ch]):
-            chan_x[(ch, k)] = stage_right[ch] + (i + 1) * TRACK_PITCH
-        left = stage_right[ch] + (len(order[ch]) + 1) * TRACK_PITCH
-        stage_left.append(left)
-        if stage == out_stage:
-            stage_right.append(left)
-            break
-        a_left = left + (POT_LEAD + 2 * pot_r + POT_TO_AMP if stage_pots[stage] else AMP_LEAD)
-        amp_left[stage] = a_left
-        # each output lead long enough for what it carries, written on it
-        widths = [amp_width(p.amp.role, p.half, p.amp.id, pin_weights(p.amp))
-                  + max(OUT_LEAD, text_width(signed_label(p.amp.carries.polarity, p.amp.carries.quantity), 8) + 0.3)
-                  for p in places.values() if p.stage == stage]
-        stage_right.append(a_left + max(widths, default=0.0))
+    Parameters
+    ----------
+    net : Netlist
+        The patch.
 
-    d = _Drawing(canvas="svg", show=False)
-    d.config(fontsize=8, font=FONT, lw=WIRE_LW, margin=0.15)
-    wires: list[tuple[str, tuple[float, float], tuple[float, float]]] = []
+    Returns
+    -------
+    list of (str, str)
+        (caption, SVG text) for each diagram, units in order. A unit's diagram holds that unit's
+        amplifiers and pots, named as on its own panel (A1 for U1.A1; the caption says which
+        unit); each signal that crosses to or from another unit ends in a flag
+        named for the jack at its other end ("from U2.A6", "to U2.P3", "to U1.A7 x1a"). Each
+        diagram is meant to be printed at most 186 mm wide, where its smallest text is 6 pt or
+        more.
+    """
+    found = units(net)
+    if found == [""]:
+        return [(f"{net.design} on {net.machine_name}", wiring_svg(net))]
+    pages = []
+    for unit in found:
+        graph = unit_graph(net, unit)
+        n_amps = len(graph.blocks)
+        n_pots = sum(1 for p in net.pots if unit_of(p.id) == unit)
+        others = ", ".join(u for u in found if u != unit)
+        caption = (f"Unit {unit} of {len(found)}: {_count(n_amps, 'amplifier')} and {_count(n_pots, 'pot')}, "
+                   f"named as on its panel ({unit}.A1 is A1)" + (f"; a flag is a cord to or from {others}"
+                                                                  if others else ""))
+        pages.append((caption, graph_svg(graph)))
+    return pages
 
-    def wire(name: str, a: tuple[float, float], b: tuple[float, float]) -> None:
-        if abs(a[0] - b[0]) > 1e-9 or abs(a[1] - b[1]) > 1e-9:
-            wires.append((name, a, b))
 
-    # Sensors.
-    for s in netlist.sensors:
-        y = row_y[nets[s.id].row]
-        unit = f"({s.unit})" if ("/" in s.unit or " " in s.unit) else s.unit
-        name, details = terminals.get(s.id, (quantity_label(s.quantity), [s.label, f"{s.volts_per_unit:g} V/{unit}"]))
-        d.add(Terminal(name, details, "left").at((0, y)))
-        d.extent(-0.15 - max(text_width(t, 6.5) for t in details), y)
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")
 
-    # Amplifiers, their pots and input leads.
-    for a in netlist.amplifiers:
-        p = places[a.id]
-        yc = row_y[p.row]
-        xa = amp_left[p.stage]
-        pins = [(p.pins.index(j), a.inputs[j].weight) for j in range(len(a.inputs))]
-        pin_w = [((len(p.pins) - 1) / 2 - i) * PIN_PITCH for i, _ in pins]
-        d.add(AmplifierSymbol(a.id, a.role, [(pin_w[j], w) for j, (_, w) in enumerate(pins)],
-                              p.half).at((xa, yc)))
-        x_out = xa + amp_width(a.role, p.half, a.id, pin_weights(a))
-        wire(a.id, (x_out, yc), (stage_right[p.stage], yc))
-        d.add(Text(signed_label(a.carries.polarity, a.carries.quantity), 8,
-                   ("center", "bottom")).at(((x_out + stage_right[p.stage]) / 2 - 0.05, yc + 0.05)))
-        across = [x for x in netlist.parts if x.amplifier == a.id and x.jack is None]
-        if across:  # a capacitor across the feedback (a lag built as a summer)
-            d.add(Text(" + ".join(f"{x.id} {x.fit.split(' (')[0]} across feedback" for x in across), 6,
-                       ("left", "top")).at((xa, yc - p.half - 0.06)))
-        if a.role in ("integrator", "lag"):
-            xi = xa + INT_BOX / 2
-            wire(a.id + ".ic", (xi, yc + p.half), (xi, yc + p.half + 0.22))
-            ic = "IC" if a.ic_V is None else f"IC {a.ic_V:g} V"
-            d.add(Text(ic, 7, ("center", "bottom")).at((xi, yc + p.half + 0.25)))
-        for j, inp in enumerate(a.inputs):
-            y = yc + pin_w[j]
-            if inp.pot:
-                xp = stage_left[p.stage] + POT_LEAD
-                d.add(PotSymbol(inp.pot, pot_r).at((xp, y)))
-                wire(inp.pot, (xp + 2 * pot_r, y), (xa, y))
-                setting = f"{pots[inp.pot].setting:.{dial_decimals(netlist.pot_resolution)}f}"
-                d.add(Text(setting, 7.5,
-                           ("center", "bottom")).at(((xp + 2 * pot_r + xa) / 2, y + 0.04)))
-            if a.role == "differentiator":
-                d.add(Capacitor().at((xa - 0.22, y)))
-        fitted = [x for x in netlist.parts if x.amplifier == a.id and x.jack is not None]
-        if fitted:  # a differentiator's external parts, named as the parts list names them, above it
-            d.add(Text(", ".join(f"{x.id} {x.fit.split(' (')[0]}" for x in fitted), 6,
-                       ("left", "bottom")).at((xa, yc + p.half + 0.06)))
 
-    # Output.
-    xo = stage_left[out_stage] + 0.1
-    for (_, name, details), row in zip(outputs, out_rows):
-        yo = row_y[row]
-        d.add(Terminal(name, details, "right").at((xo, yo)))
-        d.extent(xo + 0.15 + max([text_width(name, 10)] + [text_width(t, 6.5) for t in details]), yo)
+def graph_svg(graph: Graph) -> str:
+    """The SVG document of one diagram (patchgen.render.diagram_graph)."""
+    layout = place(graph)
+    return _Painter(layout, measure(layout)).paint()
 
-    # Nets: stubs, tracks, lanes.
-    for k, n in nets.items():
-        if not n.sinks:
-            continue
-        x_src = stage_right[n.stage]
-        xt_out = chan_x[(n.stage, k)]
-        wire(k, (x_src, y_of(("row", n.row, 0.0))), (xt_out, y_of(("row", n.row, 0.0))))
-        for ch, keys in n.tracks.items():
-            ys = [y_of(key) for key in keys]
-            xt = chan_x[(ch, k)]
-            wire(k, (xt, max(ys)), (xt, min(ys)))
-        for ch_from, ch_to, key in n.lanes:
-            y = y_of(key)
-            wire(k, (chan_x[(ch_from, k)], y), (chan_x[(ch_to, k)], y))
-        for s in n.sinks:
-            y = y_of(s.ykey)
-            xt = chan_x[(s.stage - 1, k)]
-            if s.target[0] == "pot":
-                x_end = stage_left[s.stage] + POT_LEAD
-            elif s.target[0] == "amp":
-                x_end = amp_left[s.stage]
+
+class _Painter:
+    """Draws a laid-out, measured diagram on a schemdraw drawing."""
+
+    def __init__(self, layout: Layout, geo: Geometry):
+        self.layout, self.geo = layout, geo
+        self.d = _Drawing(canvas="svg", show=False)
+        self.d.config(fontsize=SMALL_PT, font=FONT, lw=WIRE_LW, margin=0.1)
+        self.wires: list[tuple[str, tuple[float, float], tuple[float, float]]] = []
+
+    def wire(self, net: str, *pts: tuple[float, float]) -> None:
+        for a, b in zip(pts, pts[1:]):
+            if abs(a[0] - b[0]) > 1e-9 or abs(a[1] - b[1]) > 1e-9:
+                self.wires.append((net, a, b))
+
+    def label(self, text: str, size: float, x: float, y: float, anchor: str = "middle") -> None:
+        """A label with its baseline at (x, y)."""
+        self.d.add(Label(text, size, anchor).at((x, y)))
+        x0, y0, x1, y1 = text_box(x, y, text, size, anchor)
+        self.d.extent(x0, y0)
+        self.d.extent(x1, y1)
+
+    def paint(self) -> str:
+        g = self.layout.graph
+        for s in g.sources:
+            self.terminal(s.kind, s.name, s.details, self.geo.row_y[self.layout.source_row[s.id]], "left")
+        for b in g.blocks:
+            self.amplifier(b)
+        for b in g.outputs:
+            self.output(b)
+        self.nets()
+        for _, a, b in self.wires:
+            self.d.add(Line().at(a).to(b).linewidth(WIRE_LW))
+        for pt in _junctions(self.wires):
+            self.d.add(Dot().at(pt))
+        return _render(self.d)
+
+    def terminal(self, kind: str, name: str, details: tuple[str, ...], y: float, side: str,
+                 x: float = 0.0) -> None:
+        """A sensor, the control voltage or a connector at (x, y), its labels outside it."""
+        if kind == "connector":
+            self.d.add(Connector(side).at((x, y)))
+            reach = FLAG
+        else:
+            self.d.add(Terminal().at((x - TERMINAL_R if side == "left" else x + TERMINAL_R, y)))
+            reach = 2 * TERMINAL_R
+        sign, anchor = (-1, "end") if side == "left" else (1, "start")
+        xt = x + sign * (reach + GAP)
+        size = name_pt(kind)
+        self.label(name, size, xt, y + GAP + DESCENT * size * PT, anchor)
+        for i, line in enumerate(details):
+            top = y - GAP - i * line_pitch(SMALL_PT)
+            self.label(line, SMALL_PT, xt, top - ASCENT * SMALL_PT * PT, anchor)
+
+    def amplifier(self, b: Block) -> None:
+        geo, p = self.geo, self.layout.places[b.id]
+        yc, xa = geo.row_y[p.row], geo.amp_x[b.id]
+        sh = geo.shapes[b.id]
+        pins = [(p.offset(j) * geo.pitch, b.feeds[j].weight) for j in range(len(b.feeds))]
+        self.d.add(AmplifierSymbol(b.name, b.role, pins, geo.pitch).at((xa, yc)))
+        x_out = xa + sh.width
+        self.wire(b.id, (x_out, yc), (geo.stage_right[p.stage], yc))
+        lines = lead_lines(b.label)
+        for i, line in enumerate(lines):
+            self.label(line, SIGNAL_PT, lead_label_x(x_out, len(sh.loops)),
+                       yc + LABEL_CLEAR + (len(lines) - 1 - i) * line_pitch(SIGNAL_PT) + DESCENT * SIGNAL_PT * PT,
+                       "start")
+        if b.ic:
+            xi = xa + sh.box / 2
+            self.wire(b.id + " ic", (xi, yc + sh.half), (xi, yc + sh.half + IC_STUB))
+            self.label(b.ic, SMALL_PT, xi + GAP, yc + sh.half + GAP + DESCENT * SMALL_PT * PT, "start")
+        for j in range(len(b.feeds)):
+            self.feed(b, j, xa, yc + p.offset(j) * geo.pitch)
+        self_loop = 0
+        for k, (j, y_loop) in enumerate(zip(loops_of(b), sh.loops)):
+            xr = loop_right_x(x_out, k)
+            if j is None:       # a lag's capacitor across its feedback
+                xc = (xa + xr) / 2
+                self.wire(b.id, (xa, yc + sh.half), (xa, yc + y_loop), (xc - 0.05, yc + y_loop))
+                self.wire(b.id, (xc + 0.05, yc + y_loop), (xr, yc + y_loop), (xr, yc))
+                self.d.add(Capacitor().at((xc, yc + y_loop)))
+                base = yc + y_loop + PLATE + GAP + DESCENT * SMALL_PT * PT
+                self.label(b.feedback.value, SMALL_PT, xc, base)
+                self.label(b.feedback.id, SMALL_PT, xc, base + line_pitch(SMALL_PT))
+                continue
+            y_pin = yc + p.offset(j) * geo.pitch
+            x_in = geo.pot_x[p.stage] if b.feeds[j].pot else xa
+            xl = x_in - LEAD / 2 - self_loop * LOOP_PITCH
+            self_loop += 1
+            self.wire(b.id, (xr, yc), (xr, yc + y_loop), (xl, yc + y_loop), (xl, y_pin), (x_in, y_pin))
+
+    def feed(self, b: Block, j: int, x_end: float, y: float) -> None:
+        """A block's feed from where its wire arrives: pot, setting, parts, into x_end."""
+        geo, stage = self.geo, self.layout.places[b.id].stage
+        f = b.feeds[j]
+        x = geo.pot_x.get(stage, x_end) if f.pot else None
+        if f.pot:
+            self.d.add(PotSymbol(f.pot, geo.pot_r).at((x, y)))
+            x += 2 * geo.pot_r
+            self.label(f.setting, SIGNAL_PT, x + GAP, y + GAP + DESCENT * SIGNAL_PT * PT, "start")
+        for i, part in enumerate(f.parts):
+            xc = geo.part_x[b.id][i]
+            half = 0.05 if i == 0 else RESISTOR / 2
+            if x is not None:
+                self.wire(f"{b.id} in{j}", (x, y), (xc - half, y))
+            if i == 0:
+                self.d.add(Capacitor().at((xc, y)))
             else:
-                x_end = xo - 0.07
-            wire(k, (xt, y), (x_end, y))
+                self.d.add(Resistor().at((xc - half, y)))
+            self.part_labels(part, xc, y)
+            x = xc + half
+        if x is not None:
+            self.wire(f"{b.id} in{j}", (x, y), (x_end, y))
 
-    for _, a, b in wires:
-        d.add(Line().at(a).to(b).linewidth(WIRE_LW))
-    for pt in _junctions(wires):
-        d.add(Dot().at(pt))
+    def part_labels(self, part, xc: float, y: float) -> None:
+        """A part's id above it and its value below."""
+        self.label(part.id, SMALL_PT, xc, y + PLATE + GAP + DESCENT * SMALL_PT * PT)
+        self.label(part.value, SMALL_PT, xc, y - PLATE - GAP - ASCENT * SMALL_PT * PT)
 
-    return _render(d)
+    def output(self, b: Block) -> None:
+        geo, p = self.geo, self.layout.places[b.id]
+        y, xo = geo.row_y[p.row], geo.amp_x[b.id]
+        if b.feeds[0].pot:
+            self.feed(b, 0, xo, y)
+        self.terminal(b.role, b.name, b.details, y, "right", xo)
+
+    def entry_x(self, b: Block, j: int) -> float:
+        """Where the wire of block b's feed j arrives from its channel."""
+        geo, stage = self.geo, self.layout.places[b.id].stage
+        f = b.feeds[j]
+        if f.pot:
+            return geo.pot_x[stage]
+        if f.parts:
+            return geo.part_x[b.id][0] - 0.05
+        return geo.amp_x[b.id]
+
+    def nets(self) -> None:
+        """Stubs, tracks and lanes of every net."""
+        geo, lay = self.geo, self.layout
+        for k, n in lay.nets.items():
+            if not n.sinks:
+                continue
+            y_out = geo.y(("row", n.row, 0.0))
+            self.wire(k, (geo.stage_right[n.stage], y_out), (geo.chan_x[(n.stage, k)], y_out))
+            for ch, keys in n.tracks.items():
+                ys = [geo.y(key) for key in keys]
+                xt = geo.chan_x[(ch, k)]
+                self.wire(k, (xt, max(ys)), (xt, min(ys)))
+            for ch_from, ch_to, key in n.lanes:
+                y = geo.y(key)
+                self.wire(k, (geo.chan_x[(ch_from, k)], y), (geo.chan_x[(ch_to, k)], y))
+            for s in n.sinks:
+                y = geo.y(s.ykey)
+                block = lay.places[s.block].block
+                self.wire(k, (geo.chan_x[(s.stage - 1, k)], y), (self.entry_x(block, s.feed), y))
 
 
 class _Drawing(schemdraw.Drawing):
-    """A drawing whose bounds also cover long labels (schemdraw underestimates text width)."""
+    """A drawing whose bounds also cover its labels (schemdraw underestimates text width)."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -238,19 +301,11 @@ def _junctions(wires) -> list[tuple[float, float]]:
     """Points where three or more wire ends or passes of one net meet: drawn as dots."""
     by_net: dict[str, list] = {}
     for name, a, b in wires:
-        by_net.setdefault(name.split(".")[0], []).append((a, b))
+        by_net.setdefault(name, []).append(((round(a[0], 6), round(a[1], 6)), (round(b[0], 6), round(b[1], 6))))
     dots: set[tuple[float, float]] = set()
     for segs in by_net.values():
-        ends = {(round(x, 6), round(y, 6)) for s in segs for (x, y) in s}
-        for pt in sorted(ends):
-            degree = 0
-            for a, b in segs:
-                a_ = (round(a[0], 6), round(a[1], 6))
-                b_ = (round(b[0], 6), round(b[1], 6))
-                if pt in (a_, b_):
-                    degree += 1
-                elif _on_segment(pt, a_, b_):
-                    degree += 2
+        for pt in sorted({q for s in segs for q in s}):
+            degree = sum(1 if pt in (a, b) else 2 if _on_segment(pt, a, b) else 0 for a, b in segs)
             if degree >= 3:
                 dots.add(pt)
     return sorted(dots)

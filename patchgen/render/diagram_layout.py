@@ -1,37 +1,38 @@
-"""Where each part of the wiring diagram goes, in index space: stages left to right, rows within a
-stage, vertical tracks in the channels between stages and lanes between rows for wires that skip
-a stage or feed back. Everything follows from the netlist in a fixed order."""
+"""Where each part of a wiring diagram goes, in index space: stages left to right (the sources,
+one stage per level of amplifiers, the terminals on the right), rows within a stage, vertical
+tracks in the channels between stages, and lanes between rows for wires that skip a stage or feed
+back. An amplifier's feedback to its own input is not routed here: it is drawn as a loop over
+the amplifier. Everything follows from the graph in a fixed order."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from patchgen.patch.netlist import Amplifier, Netlist
-from patchgen.patch.reading import read
-from patchgen.render.diagram_symbols import amp_half_height
-
-# ----------------------------------------------------------------------------------------------
-# Placement in index space
+from patchgen.render.diagram_graph import Block, Graph
 
 
 @dataclass
-class AmpPlace:
-    """Where an amplifier sits: stage, row and its input pins."""
+class Place:
+    """Where a block sits: stage, row and the order of its input pins (feed indices, top first)."""
 
-    amp: Amplifier
+    block: Block
     stage: int
-    row: int = 0
-    pins: list[int] = field(default_factory=list)  # input index for each pin, top first
-    half: float = 0.62
+    row: int
+    pins: list[int]
+
+    def offset(self, j: int) -> float:
+        """Height of feed j's pin above the block's centre, in pin pitches."""
+        return (len(self.pins) - 1) / 2 - self.pins.index(j)
 
 
 @dataclass
 class Sink:
-    """One end of a wire: an amplifier pin or pot a signal feeds."""
+    """One end of a wire: the pot or pin of a block's feed."""
 
     stage: int
     ykey: tuple          # ("row", row, offset in pitches) or ("gap", gap, slot)
-    target: tuple        # ("pot", pot id) | ("amp", amp id, pin offset) | ("out",)
+    block: str
+    feed: int
 
 
 @dataclass
@@ -46,80 +47,78 @@ class Net:
     lanes: list[tuple[int, int, tuple]] = field(default_factory=list)  # (ch_from, ch_to, ykey)
 
 
-def place(net: Netlist, outputs: list[str] | None = None):
-    """Stages, rows, tracks and lanes of every part of a netlist's diagram, in index space.
-    ``outputs``: the amplifiers drawn as terminals on the right (default: the control output)."""
-    outputs = outputs or [net.output.source]
-    level = read(net).levels()
-    sensors = [s.id for s in net.sensors]
-    n_stages = max([level[a.id] for a in net.amplifiers], default=0) + 2  # + sensors + output
-    out_stage = n_stages - 1
-    row_of: dict[str, int] = {s: i for i, s in enumerate(sensors)}
-    places: dict[str, AmpPlace] = {}
-    occupant: list[dict[int, str]] = [{i: sid for i, sid in enumerate(sensors)}]
-    for stage in range(1, out_stage):
-        amps = [a for a in net.amplifiers if level[a.id] == stage]
+@dataclass
+class Layout:
+    """A diagram in index space."""
 
-        def bary(a: Amplifier) -> float:
-            rows = [row_of[i.source] for i in a.inputs if i.source in row_of]
-            return sum(rows) / len(rows) if rows else float(len(sensors))
+    graph: Graph
+    source_row: dict[str, int]
+    places: dict[str, Place]      # amplifiers and right-hand terminals
+    nets: dict[str, Net]
+    n_rows: int
+    out_stage: int
+    slots: list[int]              # lanes in each gap between rows (gap 0 above row 0)
 
-        order = sorted(range(len(amps)), key=lambda k: (bary(amps[k]), k))
+
+def self_feeds(block: Block) -> list[int]:
+    """Indices of the feeds an amplifier takes from its own output."""
+    return [j for j, f in enumerate(block.feeds) if f.source == block.id]
+
+
+def place(graph: Graph) -> Layout:
+    """Stages, rows, pins, tracks and lanes of every part of a diagram, in index space."""
+    out_stage = max(graph.level.values(), default=0) + 1
+    row_of: dict[str, int] = {s.id: i for i, s in enumerate(graph.sources)}
+    source_row = dict(row_of)
+    places: dict[str, Place] = {}
+    occupant: list[dict[int, str]] = [{i: s.id for i, s in enumerate(graph.sources)}]
+    for stage in range(1, out_stage + 1):
+        items = ([b for b in graph.blocks if graph.level[b.id] == stage] if stage < out_stage
+                 else list(graph.outputs))
+
+        def bary(b: Block) -> float:
+            rows = [row_of[f.source] for f in b.feeds if f.source in row_of and f.source != b.id]
+            return sum(rows) / len(rows) if rows else float(len(graph.sources))
+
         before = occupant[stage - 1]
         occupant.append({})
         nxt = 0
-        for k in order:
-            a = amps[k]
-            pins = sorted(range(len(a.inputs)),
-                          key=lambda j: (row_of.get(a.inputs[j].source, 1e6), j))
-            row = max(nxt, int(round(bary(a))))
+        for k in sorted(range(len(items)), key=lambda k: (bary(items[k]), k)):
+            b = items[k]
+            pins = sorted(range(len(b.feeds)),
+                          key=lambda j: (-1 if b.feeds[j].source == b.id
+                                         else row_of.get(b.feeds[j].source, 1e6), j))
+            row = max(nxt, int(round(bary(b))))
             # An input entering at the height where another signal leaves the previous stage
             # would read as one wire: move down until the centre input is free or the same.
             if len(pins) % 2 == 1:
-                centre = a.inputs[pins[len(pins) // 2]].source
+                centre = b.feeds[pins[len(pins) // 2]].source
                 while before.get(row, centre) != centre:
                     row += 1
-            row_of[a.id] = row
-            occupant[stage][row] = a.id
+            row_of[b.id] = row
+            occupant[stage][row] = b.id
             nxt = row + 1
-            places[a.id] = AmpPlace(a, stage, row, pins, amp_half_height(len(a.inputs)))
-    last = occupant[out_stage - 1]
-    out_rows: list[int] = []
-    for src in outputs:
-        out_row = row_of.get(src, 0)
-        while last.get(out_row, src) != src or out_row in out_rows:
-            out_row += 1
-        out_rows.append(out_row)
-    n_rows = max(list(row_of.values()) + out_rows) + 1
+            places[b.id] = Place(b, stage, row, pins)
+    n_rows = max(list(row_of.values()), default=0) + 1
 
-    def pin_offset(p: AmpPlace, j: int) -> float:
-        i = p.pins.index(j)
-        return (len(p.pins) - 1) / 2 - i      # +: above the centre, in pitches
-
-    nets: dict[str, Net] = {}
-    for sid in sensors:
-        nets[sid] = Net(sid, 0, row_of[sid])
-    for a in net.amplifiers:
-        nets[a.id] = Net(a.id, places[a.id].stage, places[a.id].row)
-    for a in net.amplifiers:
-        p = places[a.id]
-        for j, inp in enumerate(a.inputs):
-            off = pin_offset(p, j)
-            target = ("pot", inp.pot) if inp.pot else ("amp", a.id, off)
-            nets[inp.source].sinks.append(Sink(p.stage, ("row", p.row, off), target))
-    for k, (src, row) in enumerate(zip(outputs, out_rows)):
-        nets[src].sinks.append(Sink(out_stage, ("row", row, 0.0), ("out", k)))
+    nets: dict[str, Net] = {s.id: Net(s.id, 0, row_of[s.id]) for s in graph.sources}
+    for b in graph.blocks:
+        nets[b.id] = Net(b.id, places[b.id].stage, places[b.id].row)
+    for b in list(graph.blocks) + list(graph.outputs):
+        p = places[b.id]
+        for j, f in enumerate(b.feeds):
+            if f.source != b.id:
+                nets[f.source].sinks.append(Sink(p.stage, ("row", p.row, p.offset(j)), b.id, j))
 
     # Tracks and lanes.
     lane_use: dict[tuple[int, int], list[tuple[int, int]]] = {}  # (gap, slot) -> channel spans
     for n in nets.values():
-        out_key = ("row", n.row, 0.0)
+        if not n.sinks:
+            continue
         by_channel: dict[int, list[Sink]] = {}
         for s in n.sinks:
             by_channel.setdefault(s.stage - 1, []).append(s)
-        if not n.sinks:
-            continue
-        n.tracks.setdefault(n.stage, []).append(out_key)
+        n.tracks.setdefault(n.stage, []).append(("row", n.row, 0.0))
         for ch in sorted(by_channel):
             sinks = by_channel[ch]
             n.tracks.setdefault(ch, []).extend(s.ykey for s in sinks)
@@ -145,7 +144,7 @@ def place(net: Netlist, outputs: list[str] | None = None):
             n.lanes.append((n.stage, ch, key))
     slots = [1 + max([s for (g, s) in lane_use if g == gap], default=-1)
              for gap in range(n_rows + 1)]
-    return level, places, nets, n_rows, out_stage, out_rows, slots
+    return Layout(graph, source_row, places, nets, n_rows, out_stage, slots)
 
 
 def track_order(nets: dict[str, Net], channel: int) -> list[str]:

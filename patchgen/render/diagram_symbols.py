@@ -1,9 +1,19 @@
-"""The wiring diagram's symbols and geometry: amplifiers, pots, capacitors, terminals and labels
-in analog-computer notation, as schemdraw elements, with the sizes the layout works from."""
+"""The wiring diagram's symbols and labels: amplifiers, pots, parts, terminals and connectors in
+analog-computer notation as schemdraw elements, the names it writes, and the text metric every
+label's room is computed from.
+
+Geometry is in drawing units: schemdraw draws 0.5 inch per unit, so one unit is 36 pt. Text is
+placed by its baseline (SVG's default alphabetic baseline, which every renderer agrees on) and
+takes the room :func:`text_box` gives it: a conservative box from the font size and the number of
+characters, wide enough for DejaVu Sans, Arial and Liberation Sans.
+"""
 
 from __future__ import annotations
 
-from patchgen.patch.netlist import Amplifier, Netlist
+import math
+
+from patchgen.patch.netlist import Part
+from patchgen.patch.parts import fmt_value
 from patchgen.render.schematic import (
     Element,
     Segment,
@@ -12,181 +22,83 @@ from patchgen.render.schematic import (
     SegmentText,
 )
 
-# Geometry in drawing units (schemdraw draws 0.5 inch per unit, so 1 unit = 36 pt).
+PT = 1 / 36             # drawing units per point
+
+# Font sizes in points. The smallest is 7 pt, so a diagram up to 615 pt wide prints it at 6 pt or
+# more on the sheet's 186 mm (527 pt).
+NAME_PT = 9.0           # terminal names
+ID_PT = 7.5             # amplifier ids
+SIGNAL_PT = 7.0         # what an amplifier carries, pot settings
+SMALL_PT = 7.0          # weights, pot ids, details, IC, part labels
+
+# Geometry in drawing units.
 PIN_PITCH = 0.72        # vertical distance between two inputs of one amplifier
-POT_R = 0.26            # pot circle radius
-POT_LEAD = 0.30         # wire from the stage's left edge to a pot
-POT_TO_AMP = 0.80       # wire from a pot to its amplifier input (the setting is written on it)
-AMP_LEAD = 0.25         # left margin of a stage without pots
-OUT_LEAD = 0.75         # amplifier output lead (what it carries is written on it)
-TRACK_PITCH = 0.22      # distance between vertical tracks in a channel
+PIN_MARGIN = 0.55       # from the outer pins to the corners of the amplifier symbol
+POT_R = 0.26            # smallest pot circle radius
+INT_BOX = 0.42          # smallest width of the integrator's input rectangle
+TRACK_PITCH = 0.16      # distance between vertical tracks in a channel
 LANE_PITCH = 0.22       # distance between lanes in one gap between rows
-ROW_GAP = 0.30          # empty space between two rows
-INT_BOX = 0.42          # width of the integrator's input rectangle
-SENSOR_PAD = 0.30       # half height of a sensor or output terminal row
+LOOP_PITCH = 0.20       # distance between nested feedback loops
+ROW_GAP = 0.24          # empty space between two rows
+LEAD = 0.18             # shortest wire between two things on one line
+GAP = 0.06              # clearance between a label and what it names
+TERMINAL_R = 0.07       # open circle of a sensor or output terminal
+FLAG = 0.30             # length of an off-unit connector's flag
+PLATE = 0.13            # half the height of a capacitor plate
+RESISTOR = 0.42         # length of a resistor's zigzag
 WIRE_LW = 1.1
 SYMBOL_LW = 1.5
 FONT = "DejaVu Sans, Arial, sans-serif"
 
+_EM_PER_CHAR = 0.62     # conservative width of a character, in font sizes
+_EM_EXTRA = 0.20        # and of the whole label (short labels of wide digits and capitals)
+ASCENT = 1.00           # top of a label above its baseline, in font sizes
+DESCENT = 0.25          # bottom below it
+
 _GREEK = {"theta": "θ", "phi": "φ", "alpha": "α", "omega": "ω"}
 
 
+# ----------------------------------------------------------------------------------------------
+# Names
+
+
 def quantity_label(q: str) -> str:
-    """Readable name of a state or signal: theta_dot -> θ̇, int_theta -> ∫θ, xhat_s -> ŝ,
-    z_theta_dot -> z(θ̇), what_theta_dot -> ŵ(θ̇), theta_x1.48 -> 1.48·θ, partial u_c -> partial u_c.
-    A combining dot or hat goes on a one-letter symbol only (on a longer name it would land on its
-    last letter: theta_dot is θ̇, never thetȧ)."""
-    if " " in q:  # "partial u_c": each word on its own
-        return " ".join(quantity_label(w) for w in q.split(" "))
-    for prefix, name in (("z_", "z"), ("what_", "ŵ")):
-        if q.startswith(prefix):
-            return f"{name}({quantity_label(q[len(prefix):])})"
-    stage = q.rsplit("_x", 1)
-    if len(stage) == 2 and stage[1].replace(".", "", 1).isdigit():
-        return f"{stage[1]}·{quantity_label(stage[0])}"
-    hat = ""
-    if q.startswith("xhat_"):
-        q, hat = q[5:], "\u0302"
-    dot = ""
-    if q.endswith("_dot"):
-        q, dot = q[:-4], "\u0307"
-    integral = ""
-    if q.startswith("int_"):
-        q, integral = q[4:], "∫"
-    base = _GREEK.get(q, q)
-    if len(base) > 1 and (dot or hat):  # a mark would sit on the last letter: write it out
-        name = f"d{base}/dt" if dot else base
-        return f"{integral}{'est. ' if hat else ''}{name}"
-    return f"{integral}{base}{hat}{dot}"
+    """Readable name of a state or signal, in characters every common font has.
+
+    Parameters
+    ----------
+    q : str
+        A netlist quantity: ``theta``, ``s_dot``, ``int_theta``, ``xhat_s``, ``z_theta_dot``,
+        ``what_actuator``, ``partial u_c`` ...
+
+    Returns
+    -------
+    str
+        Greek letters for their names, ``d./dt`` for a derivative, ``∫`` for an integral,
+        ``est.`` for an estimate (Kalman ``xhat_``, reduced observer ``what_``) and ``z(.)`` for
+        a reduced-observer state: ``theta_dot`` -> ``dθ/dt``, ``int_theta`` -> ``∫θ``,
+        ``xhat_s`` -> ``est. s``, ``z_theta_dot`` -> ``z(dθ/dt)``, ``partial u_c`` ->
+        ``partial u_c``. No combining marks (they render badly in many fonts).
+    """
+    if q.startswith("partial "):
+        return "partial " + quantity_label(q[len("partial "):])
+    for prefix, form in (("xhat_", "est. {}"), ("what_", "est. {}"), ("z_", "z({})"), ("int_", "∫{}")):
+        if q.startswith(prefix) and len(q) > len(prefix):
+            return form.format(quantity_label(q[len(prefix):]))
+    if q.endswith("_dot") and len(q) > len("_dot"):
+        return f"d{quantity_label(q[:-len('_dot')])}/dt"
+    return _GREEK.get(q, q)
 
 
 def signed_label(polarity: int, quantity: str) -> str:
-    """A quantity with its polarity, as the diagram writes it (a leading minus for -1)."""
+    """A quantity with its polarity, as the diagram and the sheet write it (``−`` for -1)."""
     return ("+" if polarity > 0 else "−") + quantity_label(quantity)
 
 
-# ----------------------------------------------------------------------------------------------
-# Custom elements (local coordinates: origin at the element's reference point)
-
-
-class PotSymbol(Element):
-    """Coefficient pot: a circle with its id; input on the left, wiper output on the right."""
-
-    def __init__(self, pot_id: str, radius: float, **kwargs):
-        super().__init__(**kwargs)
-        self.segments.append(SegmentCircle((radius, 0), radius, lw=SYMBOL_LW))
-        self.segments.append(SegmentText((radius, 0), pot_id, fontsize=7, font=FONT,
-                                         align=("center", "center")))
-
-
-class AmplifierSymbol(Element):
-    """Inverting amplifier in analog-computer notation, drawn from its input side at x = 0.
-
-    ``pins`` are the input heights (relative to the centre) with their weights, top first.
-    """
-
-    def __init__(self, amp_id: str, role: str, pins: list[tuple[float, int]], half: float,
-                 **kwargs):
-        super().__init__(**kwargs)
-        width = amp_width(role, half, amp_id, pins)
-        x0 = INT_BOX if role in ("integrator", "lag") else 0.0
-        tri = [(x0, half), (width, 0.0), (x0, -half)]
-        self.segments.append(SegmentPoly(tri, lw=SYMBOL_LW, fill="white"))
-        if role in ("integrator", "lag"):
-            self.segments.append(SegmentPoly([(0, half), (x0, half), (x0, -half), (0, -half)],
-                                             lw=SYMBOL_LW, fill="white"))
-        for y, w in pins:
-            x_text = 0.06 if role in ("integrator", "lag") else 0.08
-            self.segments.append(SegmentText((x_text, y), str(w), fontsize=7, font=FONT,
-                                             align=("left", "center")))
-        cx = x0 + label_offset(pins) + label_width(amp_id) / 2
-        self.segments.append(SegmentText((cx, 0.0 if role in ("summer", "inverter") else 0.17),
-                                         amp_id, fontsize=8.5, font=FONT,
-                                         align=("center", "center")))
-        if role == "differentiator":
-            self.segments.append(SegmentText((cx, -0.17), "d/dt", fontsize=6.5, font=FONT,
-                                             align=("center", "center")))
-        elif role == "integrator":
-            self.segments.append(SegmentText((cx, -0.17), "∫", fontsize=8, font=FONT,
-                                             align=("center", "center")))
-        elif role == "lag":
-            self.segments.append(SegmentText((cx, -0.17), "lag", fontsize=6.5, font=FONT,
-                                             align=("center", "center")))
-        self.anchors["out"] = (width, 0)
-
-
-class Capacitor(Element):
-    """Two plates across a horizontal wire at x = 0 (differentiator input)."""
-
-    def __init__(self, **kwargs):
-        super().__init__(**kwargs)
-        g, h = 0.05, 0.13
-        self.segments.append(SegmentPoly([(-g, h), (g, h), (g, -h), (-g, -h)], color="white",
-                                         fill="white", lw=0.1, zorder=3))
-        self.segments.append(Segment([(-g, h), (-g, -h)], lw=SYMBOL_LW, zorder=4))
-        self.segments.append(Segment([(g, h), (g, -h)], lw=SYMBOL_LW, zorder=4))
-
-
-class Terminal(Element):
-    """A named signal entering or leaving the machine: an open circle and its labels."""
-
-    def __init__(self, name: str, details: list[str], side: str, **kwargs):
-        super().__init__(**kwargs)
-        self.segments.append(SegmentCircle((0, 0), 0.07, lw=SYMBOL_LW, fill="white", zorder=4))
-        sign = -1 if side == "left" else 1
-        align = "right" if side == "left" else "left"
-        self.segments.append(SegmentText((sign * 0.15, 0.06), name, fontsize=10, font=FONT,
-                                         align=(align, "bottom")))
-        for i, line in enumerate(details):
-            self.segments.append(SegmentText((sign * 0.15, -0.08 - i * 0.22), line, fontsize=6.5,
-                                             font=FONT, align=(align, "top")))
-
-
-class Text(Element):
-    """A text label in the diagram's font."""
-
-    def __init__(self, text: str, size: float, align: tuple[str, str], **kwargs):
-        super().__init__(**kwargs)
-        self.segments.append(SegmentText((0, 0), text, fontsize=size, font=FONT, align=align))
-
-
-def amp_half_height(n_inputs: int) -> float:
-    """Half the height of an amplifier symbol with this many inputs."""
-    return max(0.62, (n_inputs - 1) * PIN_PITCH / 2 + 0.36)
-
-
-def label_width(amp_id: str) -> float:
-    """Width of an amplifier's id label in drawing units."""
-    return len(amp_id) * 0.58 * 8.5 / 36
-
-
-def pot_radius(net: Netlist) -> float:
-    """Pot circle radius: the default, or more for long ids (two-unit patches)."""
-    longest = max((len(p.id) for p in net.pots), default=2)
-    return max(POT_R, longest * 0.58 * 7 / 36 / 2 + 0.07)
-
-
-def pin_weights(a: Amplifier) -> list[tuple[float, int]]:
-    """Each input pin's offset and weight, top to bottom."""
-    return [(0.0, inp.weight) for inp in a.inputs]
-
-
-def label_offset(pins: list[tuple[float, int]]) -> float:
-    """Where the amplifier's id starts: right of the widest input weight."""
-    widest = max((len(str(w)) for _, w in pins), default=1)
-    return 0.16 + widest * 0.58 * 7 / 36
-
-
-def amp_width(role: str, half: float, amp_id: str, pins: list[tuple[float, int]]) -> float:
-    """Width of an amplifier symbol: its triangle plus room for the weights and label."""
-    room = 0.4 if role in ("summer", "inverter") else 0.65   # two-line label needs more height
-    body = max(1.05, 1.25 * half, label_offset(pins) + label_width(amp_id) + room)
-    return body + (INT_BOX if role in ("integrator", "lag") else 0.0)
-
-
-def text_width(text: str, size_pt: float) -> float:
-    """Generous width of a label in drawing units (36 pt per unit)."""
-    return len(text) * 0.56 * size_pt / 36
+def part_value(part: Part) -> str:
+    """The value of an external part as the diagram writes it: what is fitted (``6.34 kΩ``, ``1 µF``)."""
+    text = fmt_value(part.fit_value, part.unit)
+    return text.replace(" kohm", " kΩ").replace(" Mohm", " MΩ").replace(" ohm", " Ω").replace(" uF", " µF")
 
 
 def dial_decimals(resolution: float) -> int:
@@ -195,9 +107,186 @@ def dial_decimals(resolution: float) -> int:
     return max(0, len(text.split(".")[1]) if "." in text else 0)
 
 
+# ----------------------------------------------------------------------------------------------
+# Text metric
+
+
+def text_width(text: str, size_pt: float) -> float:
+    """Width a label is given, in drawing units (conservative for the diagram's fonts)."""
+    return (_EM_PER_CHAR * len(text) + _EM_EXTRA) * size_pt * PT
+
+
+def text_box(x: float, y: float, text: str, size_pt: float, anchor: str = "middle"
+             ) -> tuple[float, float, float, float]:
+    """The box (x0, y0, x1, y1) a label with its baseline at (x, y) takes (y up)."""
+    w = text_width(text, size_pt)
+    x0 = {"start": x, "middle": x - w / 2, "end": x - w}[anchor]
+    return (x0, y - DESCENT * size_pt * PT, x0 + w, y + ASCENT * size_pt * PT)
+
+
+def text_height(size_pt: float) -> float:
+    """Height a one-line label is given, in drawing units."""
+    return (ASCENT + DESCENT) * size_pt * PT
+
+
+def line_pitch(size_pt: float) -> float:
+    """Distance between the baselines of stacked lines: their height and a little air."""
+    return text_height(size_pt) + 0.02
+
+
+def centred_baseline(y: float, size_pt: float) -> float:
+    """The baseline that centres a label's box on height y."""
+    return y - (ASCENT - DESCENT) / 2 * size_pt * PT
+
+
+# ----------------------------------------------------------------------------------------------
+# Sizes of the symbols
+
+
+def pot_radius(ids: list[str]) -> float:
+    """Pot circle radius: room for the longest pot id inside the circle."""
+    half_w = max((text_width(i, SMALL_PT) for i in ids), default=0.0) / 2
+    half_h = text_height(SMALL_PT) / 2
+    return max(POT_R, math.hypot(half_w, half_h) + 0.04)
+
+
+def weight_width(weights: list[int]) -> float:
+    """Room for the widest input weight written inside an amplifier."""
+    return max((text_width(str(w), SMALL_PT) for w in weights), default=0.0)
+
+
+def amp_shape(role: str, amp_id: str, weights: list[int], pitch: float) -> tuple[float, float, float]:
+    """(half height, input box width, total width) of an amplifier symbol.
+
+    The triangle is made long enough that every inscription (the weights beside the inputs, the
+    id, ``d/dt`` for a differentiator) lies inside it with a margin, and tall enough that it need
+    not be much longer than high; an integrator writes its weights in its input rectangle.
+    """
+    n = max(len(weights), 1)
+    ww = weight_width(weights)
+    box = max(INT_BOX, ww + 2 * GAP) if role == "integrator" else 0.0
+    inside: list[tuple[float, float]] = []      # (right edge from the triangle's base, |y| reach)
+    x = GAP
+    if role != "integrator":
+        inside.append((x + ww, (n - 1) * pitch / 2 + text_height(SMALL_PT) / 2))
+        x += ww + GAP
+    idw = text_width(amp_id, ID_PT)
+    if role == "differentiator":
+        inside.append((x + max(idw, text_width("d/dt", SMALL_PT)), text_height(ID_PT) + GAP))
+    else:
+        inside.append((x + idw, text_height(ID_PT) / 2))
+    half = max(0.62, (n - 1) * pitch / 2 + PIN_MARGIN)
+    for _ in range(40):
+        length = max([1.05] + [(right + GAP) / (1 - (reach + GAP) / half) for right, reach in inside])
+        if length <= max(1.05, 1.25 * half):
+            break
+        half += 0.04
+    return half, box, box + length
+
+
+# ----------------------------------------------------------------------------------------------
+# Elements (local coordinates: origin at the element's reference point)
+
+
+class Label(Element):
+    """A one-line label with its baseline at the reference point (``anchor``: start, middle, end)."""
+
+    def __init__(self, text: str, size_pt: float, anchor: str = "middle", **kwargs):
+        super().__init__(**kwargs)
+        halign = {"start": "left", "middle": "center", "end": "right"}[anchor]
+        self.segments.append(SegmentText((0, 0), text, fontsize=size_pt, font=FONT,
+                                         align=(halign, "base")))
+
+
+class AmplifierSymbol(Element):
+    """Inverting amplifier in analog-computer notation, drawn from its input side at x = 0.
+
+    ``pins`` are the input heights (relative to the centre) with their weights. An integrator has
+    a rectangle on its input side holding the weights; a differentiator is marked ``d/dt``.
+    """
+
+    def __init__(self, amp_id: str, role: str, pins: list[tuple[float, int]], pitch: float, **kwargs):
+        super().__init__(**kwargs)
+        weights = [w for _, w in pins]
+        half, box, width = amp_shape(role, amp_id, weights, pitch)
+        self.segments.append(SegmentPoly([(box, half), (width, 0.0), (box, -half)], lw=SYMBOL_LW,
+                                         fill="white"))
+        if box:
+            self.segments.append(SegmentPoly([(0, half), (box, half), (box, -half), (0, -half)],
+                                             lw=SYMBOL_LW, fill="white"))
+        for y, w in pins:
+            self.segments.append(_text((GAP, centred_baseline(y, SMALL_PT)), str(w), SMALL_PT, "left"))
+        x = box + GAP + (0.0 if box else weight_width(weights) + GAP)
+        cx = x + text_width(amp_id, ID_PT) / 2
+        if role == "differentiator":
+            cx = x + max(text_width(amp_id, ID_PT), text_width("d/dt", SMALL_PT)) / 2
+            self.segments.append(_text((cx, GAP / 2 + DESCENT * ID_PT * PT), amp_id, ID_PT, "center"))
+            self.segments.append(_text((cx, -GAP / 2 - ASCENT * SMALL_PT * PT), "d/dt", SMALL_PT,
+                                       "center"))
+        else:
+            self.segments.append(_text((cx, centred_baseline(0.0, ID_PT)), amp_id, ID_PT, "center"))
+        self.anchors["out"] = (width, 0)
+
+
+class PotSymbol(Element):
+    """Coefficient pot: a circle with its id; input on the left, wiper output on the right."""
+
+    def __init__(self, pot_id: str, radius: float, **kwargs):
+        super().__init__(**kwargs)
+        self.segments.append(SegmentCircle((radius, 0), radius, lw=SYMBOL_LW))
+        self.segments.append(_text((radius, centred_baseline(0.0, SMALL_PT)), pot_id, SMALL_PT, "center"))
+
+
+class Capacitor(Element):
+    """Two plates across a horizontal wire, centred at x = 0; the wire stops at the plates."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        g = 0.05
+        self.segments.append(Segment([(-g, PLATE), (-g, -PLATE)], lw=SYMBOL_LW))
+        self.segments.append(Segment([(g, PLATE), (g, -PLATE)], lw=SYMBOL_LW))
+
+
+class Resistor(Element):
+    """A zigzag resistor on a horizontal wire, from x = 0 to RESISTOR."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        n, a = 6, 0.09
+        pts = [(0.0, 0.0)] + [((i + 0.5) * RESISTOR / n, a if i % 2 == 0 else -a) for i in range(n)]
+        self.segments.append(Segment(pts + [(RESISTOR, 0.0)], lw=SYMBOL_LW))
+
+
+class Terminal(Element):
+    """A signal entering or leaving the machine (a sensor, the control voltage): an open circle."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.segments.append(SegmentCircle((0, 0), TERMINAL_R, lw=SYMBOL_LW, fill="white", zorder=4))
+
+
+class Connector(Element):
+    """An off-unit connector: a flag pointing the way the signal goes, its wire end at x = 0.
+
+    ``side`` left: the signal comes in from another unit (flag from -FLAG to 0); right: it leaves
+    for another unit (flag from 0 to FLAG).
+    """
+
+    def __init__(self, side: str, **kwargs):
+        super().__init__(**kwargs)
+        h, t = 0.11, 0.10
+        x0 = -FLAG if side == "left" else 0.0
+        pts = [(x0, h), (x0 + FLAG - t, h), (x0 + FLAG, 0.0), (x0 + FLAG - t, -h), (x0, -h)]
+        self.segments.append(SegmentPoly(pts, lw=SYMBOL_LW, fill="white", zorder=4))
+
+
 class Dot(Element):
     """A junction dot where wires join."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self.segments.append(SegmentCircle((0, 0), 0.055, fill=True, lw=0.5, zorder=3))
+
+
+def _text(at: tuple[float, float], text: str, size_pt: float, halign: str) -> SegmentText:
+    return SegmentText(at, text, fontsize=size_pt, font=FONT, align=(halign, "base"))

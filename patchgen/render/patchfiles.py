@@ -14,8 +14,7 @@ from patchgen.design.margins import Margins
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.static_check import StaticCheck, static_check, static_check_csv
 from patchgen.profiles.machine import MachineProfile
-from patchgen.render.diagram import wiring_svg
-from patchgen.render.diagram_units import diagram_pages
+from patchgen.render.diagram import diagram_pages, wiring_svg
 from patchgen.render.pottable import pots_csv
 from patchgen.render.sheet import SheetSection, SheetSummary, render_sheet
 

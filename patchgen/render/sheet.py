@@ -62,7 +62,7 @@ def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[
         The design beside it: gains, poles, margins, extra sections.
     svg : str or list of (str, str)
         The wiring diagram, inlined in the HTML; or several, each with its caption (a patch on
-        slaved units: one per unit, patchgen.render.diagram_units).
+        slaved units: one per unit, patchgen.render.diagram.diagram_pages).
     procedure : Procedure
         The machine profile's procedure: the bench checklist in the machine's own words.
     """

@@ -96,3 +96,12 @@ def test_stock_fits_are_near_and_from_their_series(value):
     if "in parallel" not in text:
         m = c / 10 ** math.floor(math.log10(c) + 1e-9)
         assert any(math.isclose(m, e, rel_tol=1e-9) for e in E12)
+
+
+def test_a_two_unit_wire_list_keeps_each_units_cords_together():
+    import re
+
+    d, net = _patch("bench-recommended", kind="reduced_observer", rolloff_s=None)
+    assert net.units == 2
+    units = [int(m.group(1)) if (m := re.search(r"\bU(\d+)\.", to)) else 99 for _, to in wire_list(net)]
+    assert units == sorted(units) and units[-1] == 99  # unit 1, unit 2, then the servo command

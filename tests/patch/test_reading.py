@@ -11,7 +11,7 @@ import pytest
 from patchgen.bench.circuit import compile_circuit, sensor_constants
 from patchgen.inputs.errors import InputError
 from patchgen.patch.netlist import Netlist
-from patchgen.patch.reading import AlgebraicLoopError, read
+from patchgen.patch.reading import AlgebraicLoopError, read, stage_levels
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
@@ -178,3 +178,10 @@ def test_engine_and_deck_take_the_integrators_time_scale_from_the_reading():
     assert gp6.components.integrator_capacitor_F == 1e-6 and gp6.components.input_resistor_x1_ohm == 1e6
     assert "C_a1_f a1_sj a1_out 2e-06" in deck
     assert "V_a1_offset a1_plus 0 DC 0.004" in deck and "I_a1_bias a1_sj 0 DC 6e-09" in deck
+
+
+def test_stage_levels_put_states_first_and_feed_through_after_its_latest_source():
+    # a lag fed back from a summer after it stays in the first column; the summer follows its sources
+    lv = stage_levels(["theta", "from U2.A6"], [("L1", "lag", ["theta", "S2"]), ("S1", "summer", ["L1", "theta"]),
+                                                ("S2", "summer", ["S1", "from U2.A6"]), ("I1", "integrator", ["I1"])])
+    assert lv == {"theta": 0, "from U2.A6": 0, "L1": 1, "I1": 1, "S1": 2, "S2": 3}

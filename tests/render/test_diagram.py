@@ -1,13 +1,15 @@
-"""The SVG wiring diagram: parses, shows every pot (with its setting) and amplifier, same bytes."""
+"""The SVG wiring diagram: parses, shows every pot (with its setting) and amplifier, same bytes; one
+page per unit of slaved units."""
 
 import json
 import subprocess
 import sys
+import unicodedata
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from patchgen.patch.netlist import Netlist, read_netlist
-from patchgen.render.diagram import wiring_svg
+from patchgen.render.diagram import diagram_pages, wiring_svg
 from patchgen.render.diagram_symbols import quantity_label
 
 FIXTURE = Path(__file__).parents[1] / "fixtures" / "thesis-ch5.netlist.json"
@@ -31,7 +33,7 @@ def test_svg_shows_every_pot_with_its_setting_and_every_amplifier():
     for setting in ("0.226", "0.267", "0.271", "0.599", "0.001"):
         assert setting in texts
     # Sensors named on the left, the control voltage on the right.
-    for name in ("s", "θ", "s\u0307", "u_c"):
+    for name in ("s", "θ", "ds/dt", "u_c"):
         assert name in texts
 
 
@@ -47,7 +49,7 @@ def test_svg_marks_integrator_ic_and_differentiator():
     texts = _texts(wiring_svg(read_netlist(FIXTURE)))
     assert "IC 0 V" in texts          # A1, ic_V = 0 in the fixture
     assert "d/dt" in texts            # A5 is the differentiator
-    assert "−∫θ" in texts and "−θ̇" in texts   # what A1 and A5 carry, with sign
+    assert "−∫θ" in texts and "−dθ/dt" in texts   # what A1 and A5 carry, with sign
 
 
 def test_same_netlist_same_bytes_also_in_a_fresh_process():
@@ -98,10 +100,36 @@ def test_two_unit_netlist_with_feedback_draws_every_element():
 
 
 def test_quantity_labels():
-    assert quantity_label("theta_dot") == "θ̇"
+    assert quantity_label("theta_dot") == "dθ/dt"
+    assert quantity_label("s_dot") == "ds/dt"
     assert quantity_label("int_theta") == "∫θ"
-    assert quantity_label("xhat_s") == "s\u0302"
+    assert quantity_label("xhat_s") == "est. s"
+    assert quantity_label("what_theta_dot") == "est. dθ/dt"
+    assert quantity_label("z_actuator") == "z(actuator)"
+    assert quantity_label("partial z_theta_dot") == "partial z(dθ/dt)"
     assert quantity_label("u_c") == "u_c"
+    # no combining marks: every character stands on its own
+    names = ("theta_dot", "s_dot", "xhat_theta_dot", "z_theta_dot", "what_actuator", "int_s")
+    assert not any(unicodedata.combining(c) for q in names for c in quantity_label(q))
+
+
+def test_one_machine_is_one_page_the_whole_diagram():
+    net = read_netlist(FIXTURE)
+    [(caption, svg)] = diagram_pages(net)
+    assert svg == wiring_svg(net)
+    assert caption == f"{net.design} on {net.machine_name}"
+
+
+def test_slaved_units_are_one_page_each_with_flags_between_them():
+    net = _two_unit_netlist()
+    pages = diagram_pages(net)
+    assert [c.split()[:4] for c, _ in pages] == [["Unit", "U1", "of", "2:"], ["Unit", "U2", "of", "2:"]]
+    first, second = (_texts(svg) for _, svg in pages)
+    # each unit's own amplifiers as on its panel; U2.A7's output feeds U1.A1 and leaves for the servo
+    assert {"A1", "A5", "A6", "A7"} <= set(first) and "U1.A1" not in first
+    assert "to U1.A1 x1b" in second and "from U2.A7" in first
+    assert "to servo" in second and "to servo" not in first
+    assert pages == diagram_pages(net)
 
 
 def test_drawing_leaves_schemdraws_settings_as_it_found_them():

@@ -25,6 +25,7 @@ from patchgen.identify.recording import Recording
 MIN_TAU_S = 1e-4  # s: the fit's floor for the lag (a shorter one is a gain at any sample rate used)
 RESPONSE_SNR = 20.0  # the force must move this many noise levels for a test to excite the actuator
 LEVEL_TOLERANCE_V = 0.02  # V: command levels closer than this are one level
+GRID_TAUS, GRID_DEAD_ZONES = 18, 14  # the start's grid: lags from 0.2 ms to 5 s, dead zones to 90 % of the command
 TRAVEL_WINDOW = 0.002  # of a ramp's samples: the command is smoothed over this before its direction is read
 
 
@@ -81,8 +82,8 @@ def _grid_start(u, f, dt, with_zero: bool) -> np.ndarray:
     """(K_U, K_Z, tau, dz, F0) from a grid over tau and dz, the rest by linear least squares."""
     best = (np.inf, None)
     umax = float(np.max(np.abs(u)))
-    for tau in np.geomspace(2 * MIN_TAU_S, 5.0, 28):
-        for dz in np.linspace(0, 0.9 * umax, 24):
+    for tau in np.geomspace(2 * MIN_TAU_S, 5.0, GRID_TAUS):
+        for dz in np.linspace(0, 0.9 * umax, GRID_DEAD_ZONES):
             v = dead_zone(u, dz)
             y = lag_state(v, dt, tau)
             cols = [y, (previous(v) - y) / tau, np.ones_like(y)] if with_zero else [y, np.ones_like(y)]

@@ -18,10 +18,11 @@ from scipy import stats
 Z95 = float(stats.norm.ppf(0.975))  # two-sided 95 %
 REJECT_LEVEL = 0.01  # a model is rejected at 1 %: one bench in a hundred flagged wrongly, not one in twenty
 Z_REJECT = float(stats.norm.ppf(1 - REJECT_LEVEL / 2))
+MIN_DOF = 1.0  # Satterthwaite's degrees of freedom are not taken below one
 
 # where standard errors come from, as the report names them
-LSQ_HAC = "least squares; covariance from the residuals (Newey-West, Andrews' AR(1) bandwidth)"
-ML_KALMAN = "maximum likelihood (Kalman filter innovations); covariance from the likelihood's curvature"
+LSQ_HAC = "least squares; sandwich covariance from the residuals' autocovariance"
+ML_KALMAN = "maximum likelihood (Kalman filter innovations); sandwich covariance (curvature and scores)"
 OLS = "least squares (ordinary, t quantile)"
 DELTA = "delta method on the stated measurement uncertainties"
 WEIGHTED = "inverse-variance weighted mean of the recordings"
@@ -38,11 +39,15 @@ class Estimate:
     unit: str
     method: str
     source: str = ""
+    dof: float = math.inf  # the t distribution's degrees of freedom the interval took (inf: normal)
+    std_error: float | None = None  # given when the interval is not value +/- quantile x se
 
     @property
     def se(self) -> float:
-        """The standard error the interval stands for ((high - low) / (2 Z95))."""
-        return (self.high - self.low) / (2 * Z95)
+        """The standard error: as given, else the one the interval stands for."""
+        if self.std_error is not None:
+            return self.std_error
+        return (self.high - self.low) / (2 * quantile(self.dof))
 
     def covers(self, truth: float) -> bool:
         """Whether ``truth`` lies inside the interval."""
@@ -50,14 +55,32 @@ class Estimate:
 
     def to_dict(self) -> dict:
         """The estimate as JSON-ready numbers and words."""
-        return {"value": self.value, "interval_95": [self.low, self.high], "unit": self.unit,
-                "method": self.method, "source": self.source}
+        out = {"value": self.value, "interval_95": [self.low, self.high], "unit": self.unit,
+               "method": self.method, "source": self.source}
+        if math.isfinite(self.dof):
+            out["dof"] = self.dof
+        return out
 
 
-def normal(value: float, se: float, unit: str, method: str, source: str = "") -> Estimate:
-    """The estimate ``value +/- Z95 se``."""
+def quantile(dof: float) -> float:
+    """The two-sided 95 % quantile of Student's t with ``dof`` degrees of freedom (normal for inf)."""
+    return Z95 if not math.isfinite(dof) else float(stats.t.ppf(0.975, max(dof, MIN_DOF)))
+
+
+def normal(value: float, se: float, unit: str, method: str, source: str = "", dof: float = math.inf) -> Estimate:
+    """The estimate ``value +/- q se``, q the 95 % quantile of t with ``dof`` degrees of freedom."""
     se = abs(float(se))
-    return Estimate(float(value), float(value) - Z95 * se, float(value) + Z95 * se, unit, method, source)
+    q = quantile(dof)
+    return Estimate(float(value), float(value) - q * se, float(value) + q * se, unit, method, source,
+                    max(dof, MIN_DOF))
+
+
+def welch(parts: Sequence[tuple[float, float]]) -> float:
+    """Welch-Satterthwaite: the degrees of freedom of a sum of independent variance parts, each
+    (standard error, its degrees of freedom)."""
+    total = sum(se * se for se, _ in parts)
+    spread = sum(se ** 4 / dof for se, dof in parts if se > 0 and math.isfinite(dof))
+    return total * total / spread if spread > 0 else math.inf
 
 
 def delta(f: Callable[[np.ndarray], float], x: np.ndarray, cov: np.ndarray,
@@ -145,8 +168,11 @@ def combine(estimates: Sequence[Estimate]) -> tuple[Estimate, Check | None]:
     mean = float(np.sum(w * v) / np.sum(w))
     q = float(np.sum(w * (v - mean) ** 2))
     limit = float(stats.chi2.ppf(1 - REJECT_LEVEL, len(v) - 1))
+    share = w / np.sum(w)  # Welch-Satterthwaite: 1 / dof = sum (V / V_i)^2 / dof_i
+    spread = float(np.sum(share ** 2 / np.array([e.dof for e in estimates])))
+    dof = 1.0 / spread if spread > 0 else math.inf
     est = normal(mean, 1.0 / math.sqrt(np.sum(w)), estimates[0].unit, WEIGHTED,
-                 ", ".join(dict.fromkeys(e.source for e in estimates)))
+                 ", ".join(dict.fromkeys(e.source for e in estimates)), dof)
     text = (f"the {len(v)} recordings disagree beyond their intervals (Cochran's Q {q:.3g} > {limit:.3g}): "
             "the bench changed between them, or the model misses something" if q > limit else
             f"the {len(v)} recordings agree (Cochran's Q {q:.3g} <= {limit:.3g})")

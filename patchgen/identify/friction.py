@@ -26,7 +26,7 @@ import numpy as np
 from scipy.integrate import solve_bvp
 from scipy.optimize import brentq
 
-from patchgen.identify import kalman, lsq
+from patchgen.identify import filters, kalman, lsq
 from patchgen.identify.estimate import DELTA, ML_KALMAN, Z95, Z_REJECT, Check, Estimate, Panel, TestFit, normal
 from patchgen.identify.figures import Incline
 from patchgen.identify.recording import Recording
@@ -35,6 +35,8 @@ from patchgen.inputs.errors import InputError
 END_FRACTION = 0.1  # the coast-down is fitted until the cart has slowed to a tenth of its top speed
 START_SNR = 20.0  # the top speed must stand this many noise levels above the tachometer's noise
 SMOOTH_S = 0.05  # s: the tachometer is smoothed over this to find the peak and the end
+RESTRICTED = 3  # z0, w0 and the offset integrated out (REML, patchgen.identify.filters.linear_nll)
+NOISE = (5, 6, 7)  # log q, log r1, log r2 among the fit's parameters
 NOISE_FLOOR = 1e-9  # relative: the lowest noise variance the likelihood may reach (held there if it goes)
 
 
@@ -58,13 +60,16 @@ def coast_closed_form(p: np.ndarray, t: np.ndarray, sign: float) -> tuple[np.nda
     return z, w
 
 
-def fit_coast(rec: Recording) -> TestFit:
+def fit_coast(rec: Recording, force_bandwidth_Hz: float) -> TestFit:
     """Fit a coast-down: a = b_VF / (M + m) (1/s), Coulomb friction f (V/s, when shown), rho = K_s / K_s_dot.
 
     Parameters
     ----------
     rec : Recording
         A ``coast_down`` recording (t_s, s_V, s_dot_V).
+    force_bandwidth_Hz : float
+        The random force's bandwidth (the bench profile's; the filter carries the force as a
+        first-order process of that band, patchgen.identify.filters).
 
     Returns
     -------
@@ -89,12 +94,12 @@ def fit_coast(rec: Recording) -> TestFit:
     if k1 - k0 < 50:
         raise rec.error("t_s", f"only {k1 - k0} samples while the cart coasts: record faster "
                                f"(the cart slows in {(k1 - k0) * dt:.3g} s)")
-    t, z, w = t_all[k0:k1] - t_all[k0], z_all[k0:k1], w_all[k0:k1]
+    dt, (t, z, w) = filters.blocks(dt, t_all[k0:k1] - t_all[k0], z_all[k0:k1], w_all[k0:k1])
     sign = float(np.sign(ws[k0]))
     if np.ptp(z) < START_SNR * _mad_noise(z):
         raise rec.error("s_V", "the position pot does not move above its noise while the cart coasts")
     # a start: the noise-free coast by least squares, both channels weighted by their noise
-    nz, nw = _mad_noise(z), noise
+    nz, nw = _mad_noise(z), _mad_noise(w)
     rho0 = float(np.polyfit(np.cumsum(w) * dt, z, 1)[0])
     a0 = max(math.log(abs(w[0]) / max(abs(w[-1]), 1e-9)) / max(t[-1], dt), 1e-3)
 
@@ -106,52 +111,57 @@ def fit_coast(rec: Recording) -> TestFit:
     scale = np.array([1e-2 * a0, 1e-2 * a0 * abs(w[0]), 1e-2 * abs(rho0), nz, nw, nw])
     first = lsq.fit(oe, start, scale)
 
-    pred = np.empty(t.size)
+    pred, terms = np.empty(t.size), np.empty(t.size)
+    lam = 4.0 * force_bandwidth_Hz
 
     def nll(p: np.ndarray) -> float:
         a, f, rho, z0, w0, off, lq, lr1, lr2 = p
-        return kalman.coast_nll(z, w, dt, a, f * sign, rho, math.exp(lq), math.exp(lr1), math.exp(lr2), off,
-                                z0, w0, pred)
+        return filters.coast_nll(z, w, dt, a, f * sign, rho, math.exp(lq), lam, math.exp(lr1), math.exp(lr2), off,
+                                 z0, w0, sign, restricted[0], pred, terms)
+
+    def per_sample(p: np.ndarray) -> np.ndarray:
+        nll(p)
+        return terms.copy()
 
     resid = oe(first.p)
     r1, r2 = np.var(resid[:t.size]) * nz ** 2, np.var(resid[t.size:]) * nw ** 2
-    q0 = max(r2 * 1e-2 / dt, 1e-12)
+    q0 = max(r2 * 1e-2 / dt, 1e-12) * lam * lam
+    restricted = [RESTRICTED]
     lo_noise = [math.log(NOISE_FLOOR * max(r1, r2, 1e-12))] * 3
     p0 = np.concatenate([first.p, [math.log(q0), math.log(r1), math.log(r2)]])
-    s0 = np.concatenate([np.sqrt(np.clip(np.diag(first.cov), 1e-24, None)), [0.3, 0.05, 0.05]])
+    # the likelihood's own scales (the least-squares covariance ignores the random force)
+    s0 = np.concatenate([np.maximum(np.sqrt(np.clip(np.diag(first.cov), 0.0, None)), 1e-3 * np.abs(scale)),
+                         [0.3, 0.05, 0.05]])
     lower = np.concatenate([[1e-6, -np.inf, -np.inf, -np.inf, -np.inf, -np.inf], lo_noise])
-    # viscous alone first (f = 0), then the likelihood-ratio test of Coulomb friction
+    # viscous alone first (f = 0), then the likelihood-ratio test of Coulomb friction; the
+    # parameters in the order a, rho, z0, w0, offset, log q, log r1, log r2 (then f)
     keep = [0, 2, 3, 4, 5, 6, 7, 8]
     with_f = lambda q: np.insert(q[:8], 1, q[8] if q.size > 8 else 0.0)
-    viscous = kalman.ml_fit(lambda q: nll(with_f(q)), p0[keep], s0[keep], lower[keep])
-    f_scale = max(viscous.p[0], 1e-3) * abs(w[0])
-    both, zc = kalman.added_term(lambda q: nll(with_f(q)), viscous, s0[keep], 0.1 * f_scale, lower[keep])
-    coulomb = abs(zc) > Z_REJECT
-    checks = [Check("Coulomb friction", abs(zc), Z_REJECT, coulomb,
+    f_nll, f_terms = lambda q: nll(with_f(q)), lambda q: per_sample(with_f(q))
+    fit = kalman.ml_fit(f_nll, p0[keep], s0[keep], lower[keep], per_sample=f_terms, noise=NOISE)
+    f_scale = max(fit.p[0], 1e-3) * abs(w[0])
+    both, zc = kalman.added_term(f_nll, fit, s0[keep], 0.1 * f_scale, lower[keep])
+    coulomb = zc > Z_REJECT  # friction opposes the motion: a negative f is no friction
+    checks = [Check("Coulomb friction", zc, Z_REJECT, coulomb,
                     f"likelihood-ratio z = {zc:.3g} for a constant friction force: " +
                     ("the data show Coulomb friction (not in patchgen's plant, which is viscous)" if coulomb
                      else "viscous friction alone, as the thesis assumed"))]
     if coulomb:
-        se = np.sqrt(np.diag(viscous.cov))
-        both = kalman.ml_fit(lambda q: nll(with_f(q)), both, np.append(np.where(se > 0, se, s0[keep]), 0.1 * f_scale),
-                             np.append(lower[keep], -np.inf))
-        order = [0, 8, 1, 2, 3, 4, 5, 6, 7]
-        fit = kalman.MlFit(both.p[order], both.cov[np.ix_(order, order)], both.nll)
-    else:
-        cov = np.zeros((9, 9))
-        cov[np.ix_(keep, keep)] = viscous.cov
-        fit = kalman.MlFit(with_f(viscous.p), cov, viscous.nll)
-    nll(fit.p)
-    est = {"decay": normal(fit.p[0], fit.se(0), "1/s", ML_KALMAN, rec.source),
-           "rho": normal(fit.p[2], fit.se(2), "1/s", ML_KALMAN, rec.source),
-           "tach_offset": normal(fit.p[5], fit.se(5), "V", ML_KALMAN, rec.source)}
+        se = np.sqrt(np.diag(fit.cov))
+        restricted[0] = RESTRICTED + 1  # f enters linearly too
+        fit = kalman.ml_fit(f_nll, both, np.append(np.where(se > 0, se, s0[keep]), 0.1 * f_scale),
+                            np.append(lower[keep], -np.inf), per_sample=f_terms, noise=NOISE)
+    nll(with_f(fit.p))
+    est = {name: normal(fit.p[i], fit.se(i), unit, ML_KALMAN, rec.source, fit.dof_of(i))
+           for name, i, unit in (("decay", 0, "1/s"), ("rho", 1, "1/s"), ("tach_offset", 4, "V"))}
     if coulomb:
-        est["coulomb"] = normal(fit.p[1], fit.se(1), "V/s", ML_KALMAN, rec.source)
-    z_free, w_free = coast_closed_form(fit.p[:5], t, sign)
+        est["coulomb"] = normal(fit.p[8], fit.se(8), "V/s", ML_KALMAN, rec.source, fit.dof_of(8))
+    p_full = with_f(fit.p)
+    z_free, w_free = coast_closed_form(p_full[:5], t, sign)
     return TestFit(rec.source, rec.test, est, checks, title="coast-down",
                    notes=[f"fitted from {t_all[k0]:.3g} s (top speed) to {t_all[k1 - 1]:.3g} s "
-                          f"({END_FRACTION:.0%} of it); random force q = {math.exp(fit.p[6]):.3g} V^2/s^3"],
-                   panels=[Panel(t + t_all[k0], w, w_free + fit.p[5], "s_dot (V)"),
+                          f"({END_FRACTION:.0%} of it); random force q = {math.exp(p_full[6]):.3g} V^2/s^3"],
+                   panels=[Panel(t + t_all[k0], w, w_free + p_full[5], "s_dot (V)"),
                            Panel(t + t_all[k0], z, z_free, "s (V)"),
                            Panel(t + t_all[k0], w - pred, None, "innovation s_dot (V)")])
 
@@ -221,8 +231,9 @@ def fit_incline(fig: Incline, source: str) -> TestFit:
     se_b = float(math.sqrt(np.sum((grad * sd) ** 2)))
     bvf = b * fig.mass_kg
     se_bvf = math.sqrt((fig.mass_kg * se_b) ** 2 + (b * fig.mass_uncertainty_kg) ** 2)
-    est = {"decay": Estimate(b, max(b - Z95 * se_b, 0.0), b + Z95 * se_b, "1/s", DELTA, source),
-           "b_VF": Estimate(bvf, max(bvf - Z95 * se_bvf, 0.0), bvf + Z95 * se_bvf, "kg/s", DELTA, source)}
+    est = {"decay": Estimate(b, max(b - Z95 * se_b, 0.0), b + Z95 * se_b, "1/s", DELTA, source, std_error=se_b),
+           "b_VF": Estimate(bvf, max(bvf - Z95 * se_bvf, 0.0), bvf + Z95 * se_bvf, "kg/s", DELTA, source,
+                            std_error=se_bvf)}
     notes = [f"B.2 solved as a boundary-value problem: s'' + b s' = {fig.g_m_per_s2:g} sin({fig.angle_deg:g} deg), "
              f"s(0) = 0, s'(0) = 0, s({fig.time_s:g} s) = {fig.distance_m:g} m gives b = {b:.4g} 1/s"]
     checks = []

@@ -26,8 +26,9 @@ from pathlib import Path
 import numpy as np
 
 from patchgen.identify import actuator, friction, pendulum, sensors
-from patchgen.identify.estimate import Check, Estimate, TestFit, combine, normal
+from patchgen.identify.estimate import Check, Estimate, TestFit, combine, normal, welch
 from patchgen.identify.figures import G_TABLE_B1, Incline, Masses, read_figures
+from patchgen.identify.kalman import FitError
 from patchgen.identify.recording import Recording, expand, read_recording
 from patchgen.inputs.errors import InputError
 from patchgen.profiles.bench import BenchProfile
@@ -121,19 +122,12 @@ def identify(paths: list[str], base: BenchProfile) -> Identification:
     k_theta = _constant(result, "K_theta", "sensors.theta", base.sensors.theta, "V/rad")
     g = mass.g_m_per_s2 if mass else G_TABLE_B1
     for r in recs:
-        if r.test == "actuator_step":
-            fits.append(actuator.fit_step(r))
-        elif r.test == "actuator_ramp":
-            fits.append(actuator.fit_ramp(r))
-        elif r.test == "coast_down":
-            fits.append(friction.fit_coast(r))
-        elif r.test == "free_swing":
-            fits.append(pendulum.fit_swing(r, k_theta, g, mass.m_kg if mass else None,
-                                          mass.m_uncertainty_kg if mass else 0.0))
-        elif r.test == "quiet":
-            fits.append(sensors.fit_quiet(r))
-        elif r.test == "integrator_drift":
-            fits.append(sensors.fit_drift(r))
+        try:
+            fit = _fit(r, base, k_theta, g, mass)
+        except FitError as exc:
+            raise InputError(r.source, "", f"the {r.test} fit fails: {exc}") from None
+        if fit is not None:
+            fits.append(fit)
     for src, fig in (it for it in items if isinstance(it, tuple)):
         if isinstance(fig, Incline):
             fits.append(friction.fit_incline(fig, src))
@@ -146,9 +140,28 @@ def identify(paths: list[str], base: BenchProfile) -> Identification:
     return result
 
 
+def _fit(r: Recording, base: BenchProfile, k_theta: float, g: float, mass: Masses | None) -> TestFit | None:
+    """One recording's fit (calibrations are fitted first, by the caller)."""
+    band = base.disturbance.bandwidth_Hz
+    if r.test == "actuator_step":
+        return actuator.fit_step(r)
+    if r.test == "actuator_ramp":
+        return actuator.fit_ramp(r)
+    if r.test == "coast_down":
+        return friction.fit_coast(r, band)
+    if r.test == "free_swing":
+        return pendulum.fit_swing(r, k_theta, g, band, mass.m_kg if mass else None,
+                                  mass.m_uncertainty_kg if mass else 0.0)
+    if r.test == "quiet":
+        return sensors.fit_quiet(r)
+    if r.test == "integrator_drift":
+        return sensors.fit_drift(r)
+    return None
+
+
 def abs_estimate(e: Estimate) -> Estimate:
     """The magnitude of a signed estimate (its interval reflected when the value is negative)."""
-    return e if e.value >= 0 else Estimate(-e.value, -e.high, -e.low, e.unit, e.method, e.source)
+    return e if e.value >= 0 else Estimate(-e.value, -e.high, -e.low, e.unit, e.method, e.source, e.dof, e.std_error)
 
 
 def _combined(result: Identification, estimates: list[Estimate], what: str) -> Estimate:
@@ -214,7 +227,8 @@ def _sensors(result: Identification, base: BenchProfile, k_s: float) -> None:
         ks_se = ks.se if ks else 0.0
         value = k_s / r.value
         se = value * math.hypot(ks_se / k_s, r.se / r.value)
-        est = normal(value, se, "V/(m/s)", f"K_s / rho; {r.method}", r.source)
+        dof = welch([(value * ks_se / k_s, ks.dof if ks else math.inf), (value * r.se / r.value, r.dof)])
+        est = normal(value, se, "V/(m/s)", f"K_s / rho; {r.method}", r.source, dof)
         result.bench["sensors.s_dot"] = Parameter(value, est.unit, est, est.source)
     else:
         result.bench["sensors.s_dot"] = Parameter(base.sensors.s_dot, "V/(m/s)", None, f"base profile {result.base}")
@@ -257,14 +271,15 @@ def _plant(result: Identification, mass: Masses | None, mass_src: str) -> None:
     if decay and mass is not None:
         a = _combined(result, decay, "b_VF / (M + m)")
         total, total_se = mass.M_kg + mass.m_kg, math.hypot(mass.M_uncertainty_kg, mass.m_uncertainty_kg)
-        est = normal(a.value * total, math.hypot(a.se * total, a.value * total_se), "kg/s", a.method, a.source)
+        est = normal(a.value * total, math.hypot(a.se * total, a.value * total_se), "kg/s", a.method, a.source,
+                     welch([(a.se * total, a.dof), (a.value * total_se, math.inf)]))
         plant["b_VF"] = Parameter(est.value, "kg/s", est, est.source)
         for f in fits:
             if f.test == "coast_down" and "coulomb" in f.estimates and "sensors.s_dot" in result.bench:
                 c = f.estimates["coulomb"]
                 k = float(result.bench["sensors.s_dot"].value)
                 result.extra[f"coulomb_N ({f.source})"] = normal(c.value * total / k, c.se * total / k, "N",
-                                                                 c.method, f.source)
+                                                                 c.method, f.source, c.dof)
     elif decay:
         result.warnings.append("the coast-down gives b_VF / (M + m): a masses file (test = \"masses\") turns it "
                                "into b_VF")

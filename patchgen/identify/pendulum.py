@@ -16,13 +16,14 @@ import math
 
 import numpy as np
 
-from patchgen.identify import kalman, lsq
+from patchgen.identify import filters, kalman, lsq
 from patchgen.identify.estimate import ML_KALMAN, Z_REJECT, Check, Panel, TestFit, delta, normal
 from patchgen.identify.recording import Recording
 
 MIN_PERIODS = 5  # swings a recording must hold for its period and decay
 START_SNR = 20.0  # the swing's amplitude in noise levels
 NOISE_FLOOR = 1e-9  # relative: the lowest noise variance the likelihood may reach
+NOISE = (5, 6)  # log q, log r among the fit's parameters
 
 
 def _crossings(y: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -31,7 +32,8 @@ def _crossings(y: np.ndarray, t: np.ndarray) -> np.ndarray:
     return t[k] - y[k] * (t[k + 1] - t[k]) / (y[k + 1] - y[k])
 
 
-def fit_swing(rec: Recording, gain: float, g: float, m: float | None = None, m_se: float = 0.0) -> TestFit:
+def fit_swing(rec: Recording, gain: float, g: float, force_bandwidth_Hz: float, m: float | None = None,
+              m_se: float = 0.0) -> TestFit:
     """Fit a free swing: l (m) from the period and, with the pendulum's mass, c (kg m^2/s).
 
     Parameters
@@ -42,6 +44,9 @@ def fit_swing(rec: Recording, gain: float, g: float, m: float | None = None, m_s
         The theta sensor's constant (V/rad).
     g : float
         Gravity (m/s^2).
+    force_bandwidth_Hz : float
+        The random force's bandwidth (the bench profile's; the filter carries the torque at the tip
+        as a first-order process of that band, patchgen.identify.filters).
     m, m_se : float, optional
         The pendulum's mass (kg) and its standard uncertainty; without it c is not estimated.
 
@@ -66,7 +71,7 @@ def fit_swing(rec: Recording, gain: float, g: float, m: float | None = None, m_s
         raise rec.error("t_s", f"{max(ups.size - 1, 0)} whole swings recorded; the period and the decay need at "
                                f"least {MIN_PERIODS}: record for longer")
     k0 = int(np.searchsorted(t_all, ups[0]))
-    t, y = t_all[k0:] - t_all[k0], y_all[k0:]
+    dt, (t, y) = filters.blocks(dt, t_all[k0:] - t_all[k0], y_all[k0:])
     period = float(np.mean(np.diff(ups)))
     wd = 2 * math.pi / period
     # the decay from the amplitude of each whole swing
@@ -80,7 +85,7 @@ def fit_swing(rec: Recording, gain: float, g: float, m: float | None = None, m_s
     out = np.empty(t.size)
 
     def free(p: np.ndarray) -> np.ndarray:
-        kalman.swing_free(t.size, dt, p[0], p[1], 0.0, p[3], p[4], out)
+        filters.swing_free(t.size, dt, p[0], p[1], p[3], p[4], out)
         return gain * out + p[2]
 
     slope = (y[min(3, y.size - 1)] - y[0]) / (min(3, y.size - 1) * dt)
@@ -88,27 +93,36 @@ def fit_swing(rec: Recording, gain: float, g: float, m: float | None = None, m_s
     scale = np.array([1e-3 * max(2 * sig, 1e-3), 1e-4 * w2_0, noise, noise / gain, noise / gain * wd])
     first = lsq.fit(lambda p: free(p) - y, p0, scale)
     r = float(np.var(free(first.p) - y))
-    pred = np.empty(t.size)
+    pred, terms = np.empty(t.size), np.empty(t.size)
 
     def nll(p: np.ndarray) -> float:
         beta, w2, off, phi0, om0, lq, lr = p[:7]
         gam = p[7] if p.size > 7 else 0.0
-        return kalman.swing_nll(y, dt, beta, w2, gam, math.exp(lq), math.exp(lr), gain, off, phi0, om0, pred)
+        return filters.swing_nll(y, dt, beta, w2, gam, lam, math.exp(lq), math.exp(lr), gain, off, phi0, om0, pred,
+                                 terms)
 
-    q0 = max(r / gain ** 2 * wd ** 3 * 1e-2, 1e-12)
+    def per_sample(p: np.ndarray) -> np.ndarray:
+        nll(p)
+        return terms.copy()
+
+    lam = 4.0 * force_bandwidth_Hz
+    q0 = max(r / gain ** 2 * wd ** 3 * 1e-2, 1e-12) * lam * lam
     floor = math.log(NOISE_FLOOR * max(r, 1e-12))
     start = np.concatenate([first.p, [math.log(q0), math.log(max(noise ** 2, r * 1e-3))]])
-    se0 = np.concatenate([np.sqrt(np.clip(np.diag(first.cov), 1e-24, None)), [0.3, 0.03]])
+    # the likelihood's own scales: the least-squares covariance ignores the random torque
+    sd_y = math.sqrt(r / y.size)
+    se0 = np.array([0.1 * max(first.p[0], 1e-3), 1e-4 * first.p[1], sd_y, sd_y / gain, sd_y / gain * wd, 0.3, 0.05])
     lower = np.array([-np.inf, 0.0, -np.inf, -np.inf, -np.inf, floor - 20, floor])
-    fit = kalman.ml_fit(nll, start, se0, lower)
+    fit = kalman.ml_fit(nll, start, se0, lower, per_sample=per_sample, noise=NOISE)
     # Coulomb friction at the hinge: about beta x the swing's speed at the same decay
     gam_scale = max(fit.p[0], 1e-3) * phi_amp * wd
     both, zc = kalman.added_term(nll, fit, se0, gam_scale, lower)
-    coulomb = abs(zc) > Z_REJECT
+    coulomb = zc > Z_REJECT  # friction opposes the motion: a negative torque is no friction
     if coulomb:
         se = np.sqrt(np.diag(fit.cov))
-        fit = kalman.ml_fit(nll, both, np.append(np.where(se > 0, se, se0), gam_scale), np.append(lower, -np.inf))
-    checks = [Check("Coulomb friction", abs(zc), Z_REJECT, coulomb,
+        fit = kalman.ml_fit(nll, both, np.append(np.where(se > 0, se, se0), gam_scale), np.append(lower, -np.inf),
+                            per_sample=per_sample, noise=NOISE)
+    checks = [Check("Coulomb friction", zc, Z_REJECT, coulomb,
                     f"likelihood-ratio z = {zc:.3g} for a constant friction torque: " +
                     ("the data show a linear decay part (Coulomb friction at the hinge, not in patchgen's plant)"
                      if coulomb else "the decay is exponential: viscous friction alone, as the thesis found"))]
@@ -116,15 +130,18 @@ def fit_swing(rec: Recording, gain: float, g: float, m: float | None = None, m_s
     est = {}
     cov2 = fit.cov[:2, :2]
     lv, lse = delta(lambda v: g / v[1], fit.p[:2], cov2)
-    est["l"] = normal(lv, lse, "m", ML_KALMAN, rec.source)
-    est["beta"] = normal(fit.p[0], fit.se(0), "1/s", ML_KALMAN, rec.source)
+    est["l"] = normal(lv, lse, "m", ML_KALMAN, rec.source, fit.dof_of(1))
+    est["beta"] = normal(fit.p[0], fit.se(0), "1/s", ML_KALMAN, rec.source, fit.dof_of(0))
     if m is not None:
         cov3 = np.zeros((3, 3))
         cov3[:2, :2], cov3[2, 2] = cov2, m_se ** 2
-        cv, cse = delta(lambda v: v[0] * v[2] * (g / v[1]) ** 2, np.append(fit.p[:2], m), cov3)
-        est["c"] = normal(cv, cse, "kg m^2/s", ML_KALMAN, rec.source)
+        c_of = lambda v: v[0] * v[2] * (g / v[1]) ** 2
+        cv, cse = delta(c_of, np.append(fit.p[:2], m), cov3)
+        grad = np.zeros(fit.p.size)
+        grad[:2] = [m * (g / fit.p[1]) ** 2, -2 * fit.p[0] * m * g * g / fit.p[1] ** 3]
+        est["c"] = normal(cv, cse, "kg m^2/s", ML_KALMAN, rec.source, fit.dof(grad))
     if coulomb:
-        est["coulomb"] = normal(fit.p[7], fit.se(7), "rad/s^2", ML_KALMAN, rec.source)
+        est["coulomb"] = normal(fit.p[7], fit.se(7), "rad/s^2", ML_KALMAN, rec.source, fit.dof_of(7))
     beta = fit.p[0]
     env = amp[0] * np.exp(-0.5 * beta * (tm - tm[0]))
     t_plot = t + t_all[k0]

@@ -56,7 +56,7 @@ def fit_calibration(rec: Recording) -> TestFit:
         se = math.sqrt(s2 * np.linalg.inv(X.T @ X)[0, 0])
         tq = float(stats.t.ppf(0.975, dof))
         est[f"K_{name}"] = Estimate(float(coef[0]), float(coef[0] - tq * se), float(coef[0] + tq * se), unit, OLS,
-                                    rec.source)
+                                    rec.source, dof)
         order = np.argsort(x, kind="stable")
         panels.append(Panel(x[order], v[order], (X @ coef)[order], f"{name} (V)", xlabel=f"{name} ({ref_unit})",
                             points=True))
@@ -90,14 +90,15 @@ def noise_level(x: np.ndarray, dt: float, source: str) -> tuple[Estimate, Estima
     a_use = a if resolved else 0.0
     nu = n * (1 - a_use ** 2) / (1 + a_use ** 2)
     lo, hi = nu * var / stats.chi2.ppf(0.975, nu), nu * var / stats.chi2.ppf(0.025, nu)
-    rms = Estimate(math.sqrt(var), math.sqrt(lo), math.sqrt(hi), "V", CHI2_AR1, source)
+    rms = Estimate(math.sqrt(var), math.sqrt(lo), math.sqrt(hi), "V", CHI2_AR1, source, nu,
+                   std_error=math.sqrt(var / (2 * nu)))
     if not resolved:
         return rms, Estimate(0.5 / dt, 0.5 / dt, 0.5 / dt, "Hz", "not resolved: at least half the sample rate",
                              source), False
     band = lambda aa: (1 - aa) / ((1 + aa) * 2 * dt)
     a_lo, a_hi = max(a - Z95 * se_a, 1e-9), min(a + Z95 * se_a, 0.999999)
     return rms, Estimate(band(a), band(a_hi), band(a_lo), "Hz", "lag-1 autocorrelation of the AR(1) noise",
-                         source), True
+                         source, std_error=se_a / (dt * (1 + a) ** 2)), True
 
 
 def fit_quiet(rec: Recording) -> TestFit:

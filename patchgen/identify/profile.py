@@ -87,7 +87,8 @@ def bench_toml(result: Identification, base: BenchProfile, bench_id: str, name: 
     out = ["# A bench profile identified by patchgen identify from " + ", ".join(sources) + ".",
            "# Intervals are 95 %; docs/identify.md says how each value was fitted.",
            f"# Not identified (from the base profile {base.id}): the force limit, the track, the random forces.",
-           "", f"id = {json.dumps(bench_id)}", f"name = {json.dumps(name)}", "", "[actuator]"]
+           "", f"id = {json.dumps(bench_id)}", f"name = {json.dumps(name)}",
+           "recordings = [", *(f"    {json.dumps(s)}," for s in sources), "]", "", "[actuator]"]
     for key in ("model", "K_U", "tau", "dead_zone_V", "force_limit_N"):
         p = b[f"actuator.{key}"]
         v = data["actuator"][key]

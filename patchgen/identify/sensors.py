@@ -23,6 +23,7 @@ from patchgen.identify.estimate import CHI2_AR1, LSQ_HAC, OLS, Z95, Estimate, Pa
 from patchgen.identify.recording import Recording
 
 QUIET_LIMIT = 8.0  # a quiet sample beyond this many noise levels (median-based) means the rig moved
+QUIET_BLOCKS = 10  # the recording in this many parts, for a noise scale that a disturbance in one part leaves alone
 SENSORS = {"s_V": ("s", "V/m", "s_m", "m"), "theta_V": ("theta", "V/rad", "theta_rad", "rad")}
 
 
@@ -101,6 +102,14 @@ def noise_level(x: np.ndarray, dt: float, source: str) -> tuple[Estimate, Estima
                          source, std_error=se_a / (dt * (1 + a) ** 2)), True
 
 
+def _local_scale(r: np.ndarray, blocks: int = QUIET_BLOCKS) -> float:
+    """The noise's scale as the median over blocks of each block's own robust scale (1.4826 MAD
+    about its median): a step, a slow swing or a burst in part of the recording leaves it alone,
+    where one scale over the whole recording would grow with them and hide them."""
+    parts = np.array_split(r, blocks)
+    return float(np.median([1.4826 * np.median(np.abs(p - np.median(p))) for p in parts]))
+
+
 def fit_quiet(rec: Recording) -> TestFit:
     """Each recorded sensor's noise level (V rms) and bandwidth (Hz) from a quiet recording.
 
@@ -121,7 +130,7 @@ def fit_quiet(rec: Recording) -> TestFit:
             continue
         x = rec.columns[col]
         r = x - np.polyval(np.polyfit(t, x, 1), t)
-        robust = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+        robust = _local_scale(r)
         if robust > 0 and np.max(np.abs(r)) > QUIET_LIMIT * robust:
             k = int(np.argmax(np.abs(r)))
             raise rec.error(col, f"not quiet: {r[k]:.3g} V off its level at {t[k]:.3g} s, {abs(r[k]) / robust:.0f} "

@@ -208,7 +208,9 @@ def _actuator(result: Identification, base: BenchProfile) -> None:
         result.bench["actuator.model"] = Parameter(base.actuator.model, "", None, origin)
         result.bench["actuator.K_U"] = Parameter(base.actuator.K_U, "N/V", None, origin)
         result.bench["actuator.tau"] = Parameter(base.actuator.tau, "s", None, origin)
-    dz = _pick(fits, ("actuator_ramp", "actuator_step"), "dead_zone")
+    # the step first: its held levels pin the dead zone once the lag has settled, where in a ramp the
+    # lag, the dead zone and any hysteresis all shift the same edges
+    dz = _pick(fits, ("actuator_step", "actuator_ramp"), "dead_zone")
     if dz:
         est = _combined(result, dz, "dead zone")
         result.bench["actuator.dead_zone_V"] = Parameter(max(est.value, 0.0), "V", est, est.source)

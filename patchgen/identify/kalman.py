@@ -158,7 +158,11 @@ def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray
         scores = np.column_stack([(per_sample(p0 + scale * (z + h[i] * np.eye(p0.size)[i]))
                                    - per_sample(p0 + scale * (z - h[i] * np.eye(p0.size)[i]))) / (2 * h[i])
                                   for i in idx])
-        cov_free = cov_free @ lsq.long_run_covariance(scores) @ cov_free
+        sandwich = cov_free @ lsq.long_run_covariance(scores) @ cov_free
+        # each variance the larger of the sandwich's and the curvature's: the long-run covariance
+        # of the scores is itself estimated, and low by chance as often as the curvature is optimistic
+        grow = np.sqrt(np.maximum(1.0, np.diag(cov_free) / np.maximum(np.diag(sandwich), 1e-300)))
+        cov_free = sandwich * np.outer(grow, grow)
     if not np.all(np.isfinite(cov_free)):
         raise FitError("the likelihood cannot be evaluated around its best fit (a noise level at its floor?)")
     cov_z = np.zeros((p0.size, p0.size))

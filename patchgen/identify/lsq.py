@@ -4,10 +4,10 @@ A bench recording's residuals are not white: the random force on the cart and a 
 band-limited noise colour them, so the textbook covariance s^2 (J'J)^-1 would give intervals too
 narrow. The residuals are a stationary series and the sensitivities J the model's own, so the
 scores J_t r_t have the covariance S = sum J_t J_u' gamma(t - u), gamma the residuals'
-autocovariance, estimated from them as far as it reaches; the sandwich (J'J)^-1 S (J'J)^-1 is the
-parameters' covariance. For scores that are not of that form (a likelihood's), the long-run
-covariance with Bartlett weights (Newey & West, Econometrica 1987) over Andrews' AR(1) plug-in
-lag (Econometrica 1991).
+autocovariance, of the ARMA(1,1) shape a first-order random force under white noise gives; the
+sandwich (J'J)^-1 S (J'J)^-1 is the parameters' covariance. For scores that are not of that form
+(a likelihood's), the long-run covariance with Bartlett weights (Newey & West, Econometrica
+1987) over Andrews' AR(1) plug-in lag (Econometrica 1991).
 
 The same covariance gives a score (Lagrange multiplier) test of an added term: its sensitivity,
 with the fitted parameters' sensitivities projected out, should not correlate with the residuals
@@ -59,29 +59,40 @@ def long_run_covariance(scores: np.ndarray) -> np.ndarray:
     return _bartlett(s, andrews_lag(s))
 
 
-def residual_lags(r: np.ndarray) -> int:
-    """How far the residuals' autocorrelation reaches: the lag at which an AR(1) with their lag-1
-    autocorrelation has fallen below CORRELATION_FLOOR, twice over, at most MAX_LAG_FRACTION of n."""
+def arma11_autocovariance(r: np.ndarray) -> tuple[float, float, float]:
+    """gamma(0), gamma(1) and the decay rho of an ARMA(1,1) autocovariance (gamma(k) = gamma(1)
+    rho^(k-1) for k >= 1) matched to the residuals' first three sample autocovariances: the shape of
+    a first-order random force seen through white sensor or gauge noise. rho is 0 (white noise)
+    when the residuals show no positive, decaying correlation."""
     x = r - r.mean()
-    den = float(x[:-1] @ x[:-1])
-    rho = abs(float(x[1:] @ x[:-1]) / den) if den > 0 else 0.0
-    if rho < 1e-3:
-        return 1
-    reach = math.log(CORRELATION_FLOOR) / math.log(min(rho, 0.999))
-    return int(min(max(1, math.ceil(2 * reach)), MAX_LAG_FRACTION * r.size))
+    n = x.size
+    g = [float(x[k:] @ x[:n - k]) / n for k in range(3)]
+    rho = g[2] / g[1] if g[1] > 0 and g[2] > 0 else 0.0
+    if not 0.0 < rho < 1.0:
+        rho, g[1] = 0.0, max(g[1], 0.0)
+    return g[0], g[1], min(rho, 0.999)
 
 
 def sandwich_meat(jac: np.ndarray, r: np.ndarray) -> np.ndarray:
     """sum over t, u of J_t J_u' gamma(t - u): the scores' covariance when the residuals are a
-    stationary series with autocovariance gamma (estimated from them, to residual_lags) and the
-    sensitivities J are the model's, not random."""
+    stationary series with autocovariance gamma and the sensitivities J are the model's, not random.
+
+    gamma is the ARMA(1,1) shape fitted to the residuals' first autocovariances
+    (arma11_autocovariance), summed until rho^k falls below CORRELATION_FLOOR^1.5 (1e-6). Summing
+    the residuals' own sample autocovariances instead would be biased low: least squares leaves the
+    residuals orthogonal to J, so their correlation along J is what the fit removed.
+    """
     n = r.size
-    x = r - r.mean()
-    out = (x @ x / n) * (jac.T @ jac)
-    for k in range(1, residual_lags(r) + 1):
-        g = float(x[k:] @ x[:-k]) / n
+    g0, g1, rho = arma11_autocovariance(r)
+    out = g0 * (jac.T @ jac)
+    if g1 <= 0:
+        return out
+    reach = 1 if rho == 0 else math.ceil(1.5 * math.log(CORRELATION_FLOOR) / math.log(rho))
+    gk = g1
+    for k in range(1, int(min(max(reach, 1), MAX_LAG_FRACTION * n)) + 1):
         c = jac[k:].T @ jac[:-k]
-        out += g * (c + c.T)
+        out += gk * (c + c.T)
+        gk *= rho
     return out
 
 

@@ -33,7 +33,8 @@ def bench_toml(path: Path) -> Path:
     a, s, d = b.actuator, b.sensors, b.disturbance
     noise = ", ".join(f"{k} = {v}" for k, v in s.noise_V_rms.items())
     path.write_text(f'id = "test-bench"\nname = "a bench unlike uw-1991"\n\n[actuator]\nmodel = "{a.model}"\n'
-                    f"K_U = {a.K_U}\ntau = {a.tau}\ndead_zone_V = {a.dead_zone_V}\nforce_limit_N = {a.force_limit_N}\n\n"
+                    f"K_U = {a.K_U}\ntau = {a.tau}\ndead_zone_V = {a.dead_zone_V}\n"
+                    f"force_limit_N = {a.force_limit_N}\n\n"
                     f"[sensors]\ns = {s.s}\ntheta = {s.theta}\ns_dot = {s.s_dot}\nnoise_V_rms = {{ {noise} }}\n"
                     f"noise_bandwidth_Hz = {s.noise_bandwidth_Hz}\n\n[disturbance]\n"
                     f"cart_force_N_rms = {d.cart_force_N_rms}\ntip_force_N_rms = {d.tip_force_N_rms}\n"

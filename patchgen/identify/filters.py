@@ -65,6 +65,17 @@ def expm(M):
 
 
 @nb.njit(**_JIT)
+def _propagate(Phi, P, T, Q):
+    """P <- Phi P Phi' + Q in place, for 3 x 3 (T is scratch): the filter's covariance one step on."""
+    for i in range(3):
+        for j in range(3):
+            T[i, j] = Phi[i, 0] * P[0, j] + Phi[i, 1] * P[1, j] + Phi[i, 2] * P[2, j]
+    for i in range(3):
+        for j in range(3):
+            P[i, j] = T[i, 0] * Phi[j, 0] + T[i, 1] * Phi[j, 1] + T[i, 2] * Phi[j, 2] + Q[i, j]
+
+
+@nb.njit(**_JIT)
 def coast_nll(z, w, dt, a, fs, rho, q, lam, r1, r2, offset, z0, w0, fs_sign, nfix, pred, contrib):
     """-log-likelihood (without its constant) of a coast-down's pot (z) and tachometer (w) voltages:
     z' = rho w, w' = -a w - fs + d, d' = -lam d + noise of intensity q (the random force), read with
@@ -132,12 +143,7 @@ def coast_nll(z, w, dt, a, fs, rho, q, lam, r1, r2, offset, z0, w0, fs_sign, nfi
         for i in range(3):
             xn[i] = E[i, 3] + Phi[i, 0] * x[0] + Phi[i, 1] * x[1] + Phi[i, 2] * x[2]
         x[0], x[1], x[2] = xn[0], xn[1], xn[2]
-        for i in range(3):
-            for j in range(3):
-                T[i, j] = Phi[i, 0] * P[0, j] + Phi[i, 1] * P[1, j] + Phi[i, 2] * P[2, j]
-        for i in range(3):
-            for j in range(3):
-                P[i, j] = T[i, 0] * Phi[j, 0] + T[i, 1] * Phi[j, 1] + T[i, 2] * Phi[j, 2] + Q[i, j]
+        _propagate(Phi, P, T, Q)
     if nfix > 0:
         block = info[:nfix, :nfix]
         if not np.all(np.isfinite(block)):
@@ -241,10 +247,5 @@ def swing_nll(y, dt, beta, w2, gam, lam, q, r, gain, offset, phi0, om0, pred, co
             for j in range(3):
                 Phi[i, j] = (1.0 if i == j else 0.0) + f1[i][j] * h1 + f2[i][j] * h2 + f3[i][j] * h3
         x0, x1, x2 = swing_step(x0, x1, x2, beta, w2, gam, lam, dt)
-        for i in range(3):
-            for j in range(3):
-                T[i, j] = Phi[i, 0] * P[0, j] + Phi[i, 1] * P[1, j] + Phi[i, 2] * P[2, j]
-        for i in range(3):
-            for j in range(3):
-                P[i, j] = T[i, 0] * Phi[j, 0] + T[i, 1] * Phi[j, 1] + T[i, 2] * Phi[j, 2] + Q[i, j]
+        _propagate(Phi, P, T, Q)
     return total

@@ -26,7 +26,10 @@ TARGETS = {
     "patch": (["patch", "bench-recommended", "-o", "OUT"], 1.5),
     "simulate": (["simulate", "bench-recommended", "--scenario", "hold-120s", "--runs", "1", "-o", "OUT"], 1.5),
     "recommend": (["recommend", "bench-recommended", "-o", "OUT"], 10.0),
+    "bench-test": (["bench-test", "bench-recommended", "-o", "OUT"], 3.0),
+    "identify": (["identify", "REC", "-o", "OUT"], 6.0),
 }
+RECORDINGS = ["bench-test", "bench-recommended", "--seed", "1", "-o"]  # what REC stands for: made once
 
 
 def patchgen_command() -> list[str]:
@@ -35,11 +38,12 @@ def patchgen_command() -> list[str]:
     return [str(script)] if script.exists() else [sys.executable, "-m", "patchgen"]
 
 
-def time_once(args: list[str]) -> float:
+def time_once(args: list[str], rec: Path) -> float:
     """Wall time of one whole run, in a scratch directory; a failed run stops the benchmark."""
     scratch = Path(tempfile.mkdtemp(prefix="patchgen-latency-"))
     try:
-        argv = patchgen_command() + [str(scratch / "out") if a == "OUT" else a for a in args]
+        places = {"OUT": str(scratch / "out"), "REC": str(rec)}
+        argv = patchgen_command() + [places.get(a, a) for a in args]
         t0 = time.perf_counter()
         r = subprocess.run(argv, capture_output=True, text=True, cwd=scratch)
         elapsed = time.perf_counter() - t0
@@ -69,16 +73,20 @@ def main() -> int:
           f"{opts.repeats} runs per command after one warm-up")
     print(f"{'command':10s} {'min s':>7s} {'median s':>9s} {'max s':>7s} {'target s':>9s}  result")
     missed = 0
+    rec = Path(tempfile.mkdtemp(prefix="patchgen-recordings-")) / "rec"
+    if "REC" in [a for n in names for a in TARGETS[n][0]]:
+        subprocess.run(patchgen_command() + RECORDINGS + [str(rec)], check=True, capture_output=True)
     for name in names:
         args, target = TARGETS[name]
-        time_once(args)  # warm-up: page cache, numba's cache, compiled bytecode
-        times = [time_once(args) for _ in range(opts.repeats)]
+        time_once(args, rec)  # warm-up: page cache, numba's cache, compiled bytecode
+        times = [time_once(args, rec) for _ in range(opts.repeats)]
         med = statistics.median(times)
         ok = med < target
         missed += not ok
         print(f"{name:10s} {min(times):7.2f} {med:9.2f} {max(times):7.2f} {target:9.1f}  {'pass' if ok else 'FAIL'}",
               flush=True)
     print(f"load average {load()} at the end")
+    shutil.rmtree(rec.parent, ignore_errors=True)
     return 1 if missed else 0
 
 

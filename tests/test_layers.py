@@ -17,7 +17,7 @@ import patchgen
 PKG = Path(patchgen.__file__).parent
 
 # lowest first: each folder may import itself and the folders before it
-LAYERS = ("inputs", "profiles", "plant", "design", "patch", "render", "bench", "spice", "swingup",
+LAYERS = ("inputs", "profiles", "plant", "design", "patch", "render", "bench", "identify", "spice", "swingup",
           "studies", "cli")
 
 

@@ -17,7 +17,8 @@ from .. import __version__
 # threads. Set before numpy loads; a user's own setting wins. The results are the same.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-COMMANDS = ("design", "patch", "check", "simulate", "spice", "recommend", "swingup", "sweep", "examples")
+COMMANDS = ("design", "patch", "check", "simulate", "spice", "recommend", "swingup", "sweep", "identify",
+            "bench-test", "examples")
 
 # The first sentence of each command's docstring, for `patchgen --help` without importing every
 # command (and so numpy, scipy, numba, matplotlib). tests/cli/test_cli_imports.py keeps them in step.
@@ -35,6 +36,9 @@ SUMMARIES = {
                "noise, drift).",
     "sweep": "Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2): the gains, the "
              "margins, the pots that would change, and how the nominal patch (as wired) does on that plant.",
+    "identify": "Fit a bench profile and the plant's friction and length to recordings of the standard tests.",
+    "bench-test": "Record every standard bench test of SPEC's plant on its bench (noise and random forces as the "
+                  "profile says), for practice and to check identify against known values.",
     "examples": "Copy the shipped designs (DIR/designs), scenarios (DIR/sims) and machine and bench profiles "
                 "(DIR/machines, DIR/benches) into DIR, to edit and run by path.",
 }
@@ -49,7 +53,7 @@ class _Group(click.Group):
 
     def get_command(self, ctx, name):
         if name in COMMANDS and name not in self.commands:
-            importlib.import_module(f"{__name__}.{name}")  # its @cli.command registers it
+            importlib.import_module(f"{__name__}.{name.replace('-', '_')}")  # its @cli.command registers it
         return super().get_command(ctx, name)
 
     def format_commands(self, ctx, formatter):
@@ -86,6 +90,8 @@ def cli() -> None:
     patchgen recommend SPEC -o DIR       every realisation on the bench, the best patch
     patchgen swingup SPEC -o DIR         pump-up, hand-off, hold with the patch
     patchgen sweep SPEC                  gains, margins, pots with parameters off by 10%
+    patchgen bench-test SPEC -o DIR      recordings of the standard bench tests
+    patchgen identify DIR -o OUT         a bench profile and the plant from recordings
     patchgen examples DIR                copy the shipped designs and scenarios to edit
 
     SPEC is a TOML file or a shipped design by name (bench-recommended,

@@ -65,6 +65,8 @@ class BenchProfile(InputModel):
     sensors: BenchSensors
     track: BenchTrack = BenchTrack()
     disturbance: BenchDisturbance = BenchDisturbance()
+    recordings: list[Annotated[str, Field(min_length=1)]] = Field(
+        default_factory=list, description="the recordings an identified profile was fitted to (patchgen identify)")
 
 
 def load_bench(name_or_path: str, source: str = "", field: str = "bench") -> BenchProfile:

@@ -8,6 +8,7 @@ light.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import PurePath
 from typing import TYPE_CHECKING
 
 from patchgen.design.lqg import Design
@@ -54,7 +55,7 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
     preds = predict(net, plant, bench, machine, runs_hold=runs_hold, done=done)
     header, rows = prediction_rows(preds)
     dist = bench.disturbance
-    note = (f"From this netlist on the {bench.id} bench: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
+    note = (f"From this netlist on the {bench_named(bench)}: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
             f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; random "
             f"forces {dist.cart_force_N_rms:g} N rms on the cart and {dist.tip_force_N_rms:g} "
             f"N rms at the tip (to {dist.bandwidth_Hz:g} Hz); drift "
@@ -63,6 +64,17 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
             + diagnosis_note(net, plant, bench))
     return SheetSection("Predicted on the bench", header, rows, note,
                         banner=failure_banner(bench.id, diagnose(net, plant, bench)[-1], preds))
+
+
+def bench_named(bench: BenchProfile) -> str:
+    """The bench profile as the sheet names it: its id and, for a profile fitted by patchgen identify,
+    the recordings it came from (their folder once, then the files)."""
+    if not bench.recordings:
+        return f"{bench.id} bench"
+    folders = {str(PurePath(r).parent) for r in bench.recordings}
+    names = ", ".join(PurePath(r).name if len(folders) == 1 else r for r in bench.recordings)
+    where = f" in {folders.pop()}" if len(folders) == 1 and folders != {"."} else ""
+    return f"{bench.id} bench (identified from {len(bench.recordings)} recordings{where}: {names})"
 
 
 def failure_banner(bench_id: str, loop, preds) -> str:

@@ -1,0 +1,55 @@
+"""`patchgen identify RECORDINGS... -o DIR`: a bench profile and the plant's friction and length
+from recordings of the standard tests."""
+
+from __future__ import annotations
+
+import click
+
+from . import cli
+from .options import out_option
+
+
+@cli.command("identify")
+@click.argument("recordings", nargs=-1, required=True, metavar="RECORDINGS...")
+@out_option("bench.toml, plant.toml, report.md, report.json and the fit plots")
+@click.option("--base", default="uw-1991", show_default=True,
+              help="Bench profile for what the recordings do not give (force limit, track, random forces, "
+                   "and any sensor constant or noise level not recorded).")
+@click.option("--id", "bench_id", default="identified", show_default=True, help="The new bench profile's id.")
+@click.option("--name", default=None, help="The new bench profile's name (default: from the recordings).")
+@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+@click.option("--force", is_flag=True, help="Replace output files that already exist.")
+def identify_cmd(recordings, out_dir, base, bench_id, name, as_json, force) -> None:
+    """Fit a bench profile and the plant's friction and length to recordings of the standard tests.
+
+    RECORDINGS are CSV recordings and TOML test figures, or folders of them (docs/identify.md says
+    what to record). Writes DIR/bench.toml (a bench profile every command takes through a spec's
+    bench = "DIR/bench.toml"), DIR/plant.toml (a [plant] table for a spec), DIR/report.md,
+    DIR/report.json and a fit plot per recording.
+    """
+    from patchgen.identify.files import FIXED, identify_files
+    from patchgen.identify.identify import identify
+    from patchgen.identify.recording import expand
+    from patchgen.inputs.errors import InputError
+    from patchgen.profiles.bench import load_bench
+    from patchgen.render.outputs import check_out_dir, write_files
+
+    if not bench_id.strip():
+        raise InputError("--id", "", "empty: name the profile")
+    check_out_dir(out_dir, FIXED, force)
+    profile = load_bench(base, "--base", "")
+    files = expand(list(recordings))
+    result = identify(files, profile)
+    title = name or f"identified from {len(files)} recordings"
+    outputs = identify_files(result, files, profile, bench_id, title)
+    written = write_files(out_dir, outputs, force=force)
+    if as_json:
+        click.echo(outputs["report.json"].decode(), nl=False)
+        return
+    for w in result.warnings:
+        click.echo(f"warning: {w}", err=True)
+    for key, p in list(result.bench.items()) + list(result.plant.items()):
+        e = p.estimate
+        shown = p.value if isinstance(p.value, str) else f"{p.value:.5g}"
+        click.echo(f"{key:32} {shown:>12} {p.unit:9} " + (f"95 %: {e.low:.4g} to {e.high:.4g}" if e else p.origin))
+    click.echo(f"wrote {len(written)} files into {out_dir}")

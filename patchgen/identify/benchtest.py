@@ -1,0 +1,191 @@
+"""Recordings of every standard test for a plant on a bench, as a class would record them: the
+bench profile's actuator, sensors, noise and random forces, the machine's integrator drift and
+amplifier noise, and patchgen's own plant and actuator models (patchgen.identify.motion). The
+open-loop tests need no patch. docs/identify.md gives each test's procedure; the sample rates and
+lengths here are the ones it recommends.
+
+Recording i of seed N draws from ``numpy.random.default_rng([N, i])``: the same seed gives the same
+bytes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from patchgen.identify import motion
+from patchgen.identify.figures import (
+    ASSUMED_ANGLE_UNCERTAINTY_DEG,
+    ASSUMED_DISTANCE_UNCERTAINTY_M,
+    ASSUMED_TIME_UNCERTAINTY_S,
+)
+from patchgen.plant.equations import PlantParams
+from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
+
+DYNAMIC_DT_S = 0.005  # 200 Hz for the step, ramp, coast-down and swing (docs/identify.md)
+FINE_STEPS = 5  # the motions are integrated at a fifth of the recording's interval
+GAUGE_NOISE_N_RMS = 0.02  # N: a load cell's noise, white at the recording rate (assumed)
+STEP_LEVELS = (0.4, 0.6, 0.8, 1.0)  # the step test's command levels, as fractions of the largest
+PEAK_FORCE_FRACTION = 0.8  # the largest step's force, as a fraction of the force limit
+RAMP_FORCE_FRACTION = 0.6  # the ramp's largest force, likewise
+RAMP_DURATION_S = 48.0  # zero, up, down through zero, back to zero
+COAST_TRAVEL_FRACTION = 0.6  # of the track: how far the cart would coast with viscous friction alone
+MAX_COAST_SPEED = 1.0  # m/s
+SWING_ANGLE_DEG = 15.0  # the free swing's release angle
+SWING_DURATION_S = 60.0
+QUIET_SAMPLES = 20000
+QUIET_OVERSAMPLING = 10.0  # the quiet recording samples at ten times the sensors' bandwidth (at least 1 kHz)
+DRIFT_DT_S = 0.02
+DRIFT_DURATION_S = 60.0
+INCLINE_DEG = 9.5  # the thesis's slope (B.2.1)
+FILES = ("masses.toml", "calibration.csv", "actuator-step.csv", "actuator-ramp.csv", "coast-down-1.csv",
+         "coast-down-2.csv", "incline.toml", "free-swing.csv", "quiet.csv", "integrator-drift.csv")
+
+
+def _csv(test: str, header: tuple[str, ...], cols: list[np.ndarray], about: str) -> bytes:
+    lines = [f"# test = {test}", f"# {about}", ", ".join(header)]
+    fmt = ["{:.10g}" if h == "t_s" else "{:.7g}" for h in header]
+    for row in zip(*cols):
+        lines.append(", ".join(f.format(float(v)) for f, v in zip(fmt, row)))
+    return ("\n".join(lines) + "\n").encode()
+
+
+def _toml(items: dict, about: str) -> bytes:
+    out = [f"# {about}"]
+    for k, v in items.items():
+        out.append(f'{k} = "{v}"' if isinstance(v, str) else f"{k} = {v:.10g}")
+    return ("\n".join(out) + "\n").encode()
+
+
+def _step_command(act, dt: float) -> np.ndarray:
+    reach = act.K_U / act.tau if act.model == "lag_zero" and act.tau > 0 else act.K_U
+    top = act.dead_zone_V + PEAK_FORCE_FRACTION * act.force_limit_N / reach
+    hold = max(2.0, 8 * act.tau)
+    seq = [0.0]
+    for f in STEP_LEVELS:
+        seq += [f * top, 0.0, -f * top, 0.0]
+    per = int(round(hold / dt))
+    return np.repeat(np.array(seq), per)
+
+
+def _ramp_command(act, dt: float) -> np.ndarray:
+    reach = act.K_U / act.tau if act.model == "lag_zero" and act.tau > 0 else act.K_U
+    top = act.dead_zone_V + RAMP_FORCE_FRACTION * act.force_limit_N / reach
+    t = np.arange(int(round(RAMP_DURATION_S / dt)) + 1) * dt
+    q = RAMP_DURATION_S / 4
+    return np.interp(t, [0, q, 3 * q, 4 * q], [0.0, top, -top, 0.0])
+
+
+def _held(rng, n: int, rms: float, bandwidth: float, fine: float) -> np.ndarray:
+    """A random force held over each fine step: n * FINE_STEPS values."""
+    return motion.coloured(rng, rms, bandwidth, fine, n * FINE_STEPS)
+
+
+def bench_test_files(plant: PlantParams, bench: BenchProfile, machine: MachineProfile, seed: int,
+                     label: str = "") -> dict[str, bytes]:
+    """Every standard test's recording (CSV) or figures (TOML), as file name -> bytes.
+
+    Parameters
+    ----------
+    plant : PlantParams
+        The plant (a spec's [plant]).
+    bench, machine : BenchProfile, MachineProfile
+        The bench (actuator, sensors, noise, random forces) and the machine (integrator drift,
+        amplifier noise).
+    seed : int
+        The noise seed.
+    label : str
+        Words for each file's second comment line (the spec's name, say).
+
+    Returns
+    -------
+    dict
+        masses.toml, calibration.csv, actuator-step.csv, actuator-ramp.csv, coast-down-1.csv,
+        coast-down-2.csv, incline.toml, free-swing.csv, quiet.csv, integrator-drift.csv.
+    """
+    sens, act, dist = bench.sensors, bench.actuator, bench.disturbance
+    nrms = lambda k: float(sens.noise_V_rms.get(k, 0.0))
+    about = f"recorded by patchgen bench-test{': ' + label if label else ''}, seed {seed}"
+    rng = lambda i: np.random.default_rng([seed, i])
+    dt, fine = DYNAMIC_DT_S, DYNAMIC_DT_S / FINE_STEPS
+    files: dict[str, bytes] = {}
+    files["masses.toml"] = _toml({"test": "masses", "M_kg": plant.M, "m_kg": plant.m, "g_m_per_s2": plant.g,
+                                  "d_m": plant.d}, "weighed and measured (thesis B.1); " + about)
+    r = rng(1)
+    s_ref = np.linspace(-0.4 * plant.d, 0.4 * plant.d, 11)
+    th_ref = np.linspace(-0.3, 0.3, 11)
+    files["calibration.csv"] = _csv("calibration", ("s_m", "s_V", "theta_rad", "theta_V"), [
+        s_ref, sens.s * s_ref + nrms("s") * r.standard_normal(11), th_ref,
+        sens.theta * th_ref + nrms("theta") * r.standard_normal(11)],
+        "cart set at marks on the track, pendulum at protractor marks; " + about)
+    for i, (name, command) in enumerate((("actuator-step", _step_command(act, dt)),
+                                         ("actuator-ramp", _ramp_command(act, dt))), start=2):
+        r = rng(i)
+        n = command.size
+        cart = motion.coloured(r, dist.cart_force_N_rms, dist.bandwidth_Hz, dt, n)
+        force = motion.actuator_force(command, act, dt) + cart + GAUGE_NOISE_N_RMS * r.standard_normal(n)
+        files[f"{name}.csv"] = _csv(name.replace("-", "_"), ("t_s", "u_c_V", "force_N"),
+                                    [np.arange(n) * dt, command, force], "cart held against a force gauge; " + about)
+    mass = plant.M + plant.m
+    v0 = min(COAST_TRAVEL_FRACTION * plant.d * plant.b_VF / mass, MAX_COAST_SPEED) if plant.b_VF > 0 else 0.5
+    for j, direction in enumerate((1.0, -1.0)):
+        r = rng(4 + j)
+        push_s = 0.3
+        decay = plant.b_VF / mass if plant.b_VF > 0 else 0.1
+        n = int(round((0.5 + push_s + 3.5 / decay) / dt))
+        push = np.zeros(n * FINE_STEPS)
+        k_on, k_off = int(0.5 / fine), int((0.5 + push_s) / fine)
+        push[k_on:k_off] = direction * mass * v0 / push_s * (1 + plant.b_VF / mass * push_s / 2)
+        force = push + _held(r, n, dist.cart_force_N_rms, dist.bandwidth_Hz, fine)
+        s, v = motion.slide(plant, -direction * 0.45 * plant.d, 0.0, force, fine)
+        s, v = s[:-1:FINE_STEPS], v[:-1:FINE_STEPS]
+        files[f"coast-down-{j + 1}.csv"] = _csv("coast_down", ("t_s", "s_V", "s_dot_V"), [
+            np.arange(n) * dt, sens.s * s + motion.coloured(r, nrms("s"), sens.noise_bandwidth_Hz, dt, n),
+            sens.s_dot * v + motion.coloured(r, nrms("s_dot"), sens.noise_bandwidth_Hz, dt, n)],
+            "pendulum fixed to the cart, cart pushed by hand and let go; " + about)
+    r = rng(6)
+    files["incline.toml"] = _incline(plant, r, fine, dist, about)
+    r = rng(7)
+    n = int(round(SWING_DURATION_S / dt))
+    hold = int(round(1.0 / dt))
+    tip = _held(r, n - hold, dist.tip_force_N_rms, dist.bandwidth_Hz, fine)
+    theta = np.empty(tip.size + 1)
+    p = np.array([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c, plant.d / 2])
+    motion.swing(p, math.pi + math.radians(SWING_ANGLE_DEG), fine, tip, theta)
+    phi = np.concatenate([np.full(hold, math.radians(SWING_ANGLE_DEG)), theta[:-1:FINE_STEPS] - math.pi])
+    files["free-swing.csv"] = _csv("free_swing", ("t_s", "theta_V"), [
+        np.arange(n) * dt, sens.theta * phi + motion.coloured(r, nrms("theta"), sens.noise_bandwidth_Hz, dt, n)],
+        "cart clamped, pendulum held at 15 deg from hanging and let go, angle pot zeroed hanging; " + about)
+    r = rng(8)
+    qdt = 1.0 / max(1000.0, QUIET_OVERSAMPLING * sens.noise_bandwidth_Hz)
+    cols = [np.arange(QUIET_SAMPLES) * qdt]
+    for k in ("s", "theta", "s_dot"):
+        cols.append(motion.coloured(r, nrms(k), sens.noise_bandwidth_Hz, qdt, QUIET_SAMPLES))
+    files["quiet.csv"] = _csv("quiet", ("t_s", "s_V", "theta_V", "s_dot_V"), cols,
+                              "cart and pendulum clamped at rest, motor off; " + about)
+    r = rng(9)
+    n = int(round(DRIFT_DURATION_S / DRIFT_DT_S))
+    t = np.arange(n) * DRIFT_DT_S
+    rate = machine.integrator_drift_V_per_s() * (1 if r.random() < 0.5 else -1)
+    imp = machine.imperfections
+    out = rate * t + motion.coloured(r, imp.amplifier_noise_V_rms, imp.noise_bandwidth_Hz, DRIFT_DT_S, n)
+    files["integrator-drift.csv"] = _csv("integrator_drift", ("t_s", "out_V"), [t, out],
+                                         "an integrator in OP with its inputs grounded, IC 0 V; " + about)
+    return files
+
+
+def _incline(plant: PlantParams, r: np.random.Generator, fine: float, dist, about: str) -> bytes:
+    """The inclined slide over the track between the switches, timed by hand."""
+    mass = plant.M + plant.m
+    push = np.full(int(round(10.0 / fine)), mass * plant.g * math.sin(math.radians(INCLINE_DEG)))
+    push += _held(r, push.size // FINE_STEPS, dist.cart_force_N_rms, dist.bandwidth_Hz, fine)[:push.size]
+    s, _ = motion.slide(plant, 0.0, 0.0, push, fine)
+    k = int(np.argmax(s >= plant.d))
+    t_f = (k - 1 + (plant.d - s[k - 1]) / (s[k] - s[k - 1])) * fine
+    return _toml({"test": "incline", "angle_deg": INCLINE_DEG + ASSUMED_ANGLE_UNCERTAINTY_DEG * r.standard_normal(),
+                  "distance_m": plant.d + ASSUMED_DISTANCE_UNCERTAINTY_M * r.standard_normal(),
+                  "time_s": t_f + ASSUMED_TIME_UNCERTAINTY_S * r.standard_normal(), "mass_kg": mass,
+                  "g_m_per_s2": plant.g},
+                 "pendulum fixed to the cart, let go at the high end, timed to the low switch (thesis B.2.1); " + about)

@@ -1,0 +1,49 @@
+"""Every file identify writes, as name -> bytes for the all-or-nothing writer
+(patchgen.render.outputs.write_files): bench.toml, plant.toml, report.md, report.json and a fit
+plot per recording."""
+
+from __future__ import annotations
+
+from patchgen.identify.identify import Identification
+from patchgen.identify.plots import fit_plot, plot_name
+from patchgen.identify.profile import bench_toml, plant_toml
+from patchgen.identify.report import report_json, report_markdown
+from patchgen.profiles.bench import BenchProfile
+
+FIXED = ("bench.toml", "plant.toml", "report.md", "report.json")
+
+
+def identify_files(result: Identification, files: list[str], base: BenchProfile, bench_id: str,
+                   name: str) -> dict[str, bytes]:
+    """The identified bench and plant, the report and the plots.
+
+    Parameters
+    ----------
+    result : Identification
+        What identify found.
+    files : list of str
+        The files read (named in the outputs).
+    base : BenchProfile
+        The base profile (what was not identified).
+    bench_id, name : str
+        The new bench profile's id and name.
+
+    Returns
+    -------
+    dict
+        File name -> bytes.
+    """
+    out: dict[str, bytes] = {}
+    plots: dict[str, str] = {}
+    taken: set[str] = set(FIXED)
+    for f in result.fits:
+        name_png = plot_name(f.source, taken)
+        drawn = fit_plot(f, name_png.removesuffix(".png"))
+        if drawn:
+            plots[f.source] = name_png
+            out.update(drawn)
+    out["bench.toml"] = bench_toml(result, base, bench_id, name, files).encode()
+    out["plant.toml"] = plant_toml(result, files).encode()
+    out["report.md"] = report_markdown(result, files, plots).encode()
+    out["report.json"] = report_json(result, files, plots).encode()
+    return out

@@ -1,0 +1,310 @@
+"""From a set of recordings to the bench's and the plant's parameters: every file read and fitted,
+each parameter taken from the test made for it (several recordings of one test combined by their
+inverse variances, with a check that they agree), what no recording gives taken from a base bench
+profile and said so.
+
+Where each parameter comes from, first choice first:
+
+| parameter | tests |
+|---|---|
+| actuator model, K_U, tau | actuator_step, else actuator_ramp |
+| dead zone | actuator_ramp, else actuator_step |
+| sensor constants s, theta | calibration, else the base profile |
+| s_dot constant | coast_down (K_s / rho), else the base profile |
+| noise levels, bandwidth | quiet, else the base profile |
+| b_VF | coast_down (with masses), else incline |
+| l, c | free_swing (c with masses) |
+| drift rate | integrator_drift (reported; the machine profile holds drift) |
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from patchgen.identify import actuator, friction, pendulum, sensors
+from patchgen.identify.estimate import Check, Estimate, TestFit, combine, normal, welch
+from patchgen.identify.figures import G_TABLE_B1, Incline, Masses, read_figures
+from patchgen.identify.kalman import FitError
+from patchgen.identify.recording import Recording, expand, read_recording
+from patchgen.inputs.errors import InputError
+from patchgen.profiles.bench import BenchProfile
+
+MIN_LAG_S = 1e-3  # a bench lag shorter than this is written as a pure gain (the profile's own floor)
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One value written to the profile or the plant table: its estimate when identified, else
+    where it was taken from."""
+
+    value: float | str
+    unit: str
+    estimate: Estimate | None = None
+    origin: str = ""
+
+    def to_dict(self) -> dict:
+        """JSON-ready: value, unit, interval and method when identified, origin."""
+        out = {"value": self.value, "unit": self.unit, "origin": self.origin}
+        if self.estimate is not None:
+            out.update(interval_95=[self.estimate.low, self.estimate.high], method=self.estimate.method)
+        return out
+
+
+@dataclass
+class Identification:
+    """Everything identify found: the fits, the bench profile's and the plant's parameters (dotted
+    names, e.g. ``actuator.K_U``), the checks across recordings, and warnings."""
+
+    fits: list[TestFit]
+    bench: dict[str, Parameter]
+    plant: dict[str, Parameter]
+    extra: dict[str, Estimate]
+    checks: list[Check] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    base: str = ""
+
+
+def read_all(paths: list[str]) -> list[Recording | tuple[str, Masses | Incline]]:
+    """Every recording and figures file the paths name (folders expanded), read and checked."""
+    out: list[Recording | tuple[str, Masses | Incline]] = []
+    for f in expand(paths):
+        suffix = Path(f).suffix
+        if suffix == ".csv":
+            out.append(read_recording(f))
+        elif suffix == ".toml":
+            out.append((f, read_figures(f)))
+        else:
+            raise InputError(f, "", "not a recording (.csv) or test figures (.toml)")
+    return out
+
+
+def _pick(fits: list[TestFit], tests: tuple[str, ...], name: str) -> list[Estimate]:
+    """Estimates of ``name`` from the first of ``tests`` that has any."""
+    for test in tests:
+        found = [f.estimates[name] for f in fits if f.test == test and name in f.estimates]
+        if found:
+            return found
+    return []
+
+
+def identify(paths: list[str], base: BenchProfile) -> Identification:
+    """Read and fit every recording, and gather the bench's and plant's parameters.
+
+    Parameters
+    ----------
+    paths : list of str
+        Recording files (CSV), test-figure files (TOML) and folders of them.
+    base : BenchProfile
+        Where what the recordings do not give comes from (force limit, track, random forces,
+        and any sensor constant or noise level not recorded).
+
+    Returns
+    -------
+    Identification
+        The fits and the parameters; InputError for a bad or unexciting recording.
+    """
+    items = read_all(paths)
+    masses = [(src, f) for it in items if isinstance(it, tuple) for src, f in [it] if isinstance(f, Masses)]
+    if len(masses) > 1:
+        raise InputError(masses[1][0], "test", f"masses given twice (also in {masses[0][0]})")
+    mass_src, mass = masses[0] if masses else ("", None)
+    recs = [it for it in items if isinstance(it, Recording)]
+    fits: list[TestFit] = []
+    for r in recs:
+        if r.test == "calibration":
+            fits.append(sensors.fit_calibration(r))
+    result = Identification(fits, {}, {}, {}, base=base.id)
+    k_s = _constant(result, "K_s", "sensors.s", base.sensors.s, "V/m")
+    k_theta = _constant(result, "K_theta", "sensors.theta", base.sensors.theta, "V/rad")
+    g = mass.g_m_per_s2 if mass else G_TABLE_B1
+    for r in recs:
+        try:
+            fit = _fit(r, base, k_theta, g, mass)
+        except FitError as exc:
+            raise InputError(r.source, "", f"the {r.test} fit fails: {exc}") from None
+        if fit is not None:
+            fits.append(fit)
+    for src, fig in (it for it in items if isinstance(it, tuple)):
+        if isinstance(fig, Incline):
+            fits.append(friction.fit_incline(fig, src))
+    _actuator(result, base)
+    _sensors(result, base, k_s)
+    _plant(result, mass, mass_src)
+    drift = [abs_estimate(e) for e in _pick(fits, ("integrator_drift",), "drift")]
+    if drift:
+        result.extra["drift_V_per_s"] = _combined(result, drift, "drift rate")
+    return result
+
+
+def _fit(r: Recording, base: BenchProfile, k_theta: float, g: float, mass: Masses | None) -> TestFit | None:
+    """One recording's fit (calibrations are fitted first, by the caller)."""
+    band = base.disturbance.bandwidth_Hz
+    if r.test == "actuator_step":
+        return actuator.fit_step(r)
+    if r.test == "actuator_ramp":
+        return actuator.fit_ramp(r)
+    if r.test == "coast_down":
+        return friction.fit_coast(r, band)
+    if r.test == "free_swing":
+        return pendulum.fit_swing(r, k_theta, g, band, mass.m_kg if mass else None,
+                                  mass.m_uncertainty_kg if mass else 0.0)
+    if r.test == "quiet":
+        return sensors.fit_quiet(r)
+    if r.test == "integrator_drift":
+        return sensors.fit_drift(r)
+    return None
+
+
+def abs_estimate(e: Estimate) -> Estimate:
+    """The magnitude of a signed estimate (its interval reflected when the value is negative)."""
+    return e if e.value >= 0 else Estimate(-e.value, -e.high, -e.low, e.unit, e.method, e.source, e.dof, e.std_error)
+
+
+def _combined(result: Identification, estimates: list[Estimate], what: str) -> Estimate:
+    est, check = combine(estimates)
+    if check is not None:
+        result.checks.append(Check(f"{what}: {check.name}", check.statistic, check.threshold, check.rejected,
+                                   f"{what}: {check.text}"))
+        if check.rejected:
+            result.warnings.append(f"{what}: {check.text}")
+    return est
+
+
+def _constant(result: Identification, name: str, key: str, fallback: float, unit: str) -> float:
+    found = _pick(result.fits, ("calibration",), name)
+    if found:
+        est = _combined(result, found, f"sensor constant {key}")
+        result.bench[key] = Parameter(est.value, unit, est, est.source)
+        return est.value
+    result.bench[key] = Parameter(fallback, unit, None, f"base profile {result.base}")
+    return fallback
+
+
+def _actuator(result: Identification, base: BenchProfile) -> None:
+    fits = result.fits
+    step = [f for f in fits if f.test == "actuator_step"]
+    models = sorted({n.removeprefix("model: ") for f in step for n in f.notes if n.startswith("model: ")})
+    if len(models) > 1:
+        result.warnings.append(f"the step recordings disagree on the actuator's model ({', '.join(models)}): "
+                               "the profile takes lag")
+    model = models[0] if len(models) == 1 else ("lag" if step or any(f.test == "actuator_ramp" for f in fits)
+                                                 else base.actuator.model)
+    gains = _pick(fits, ("actuator_step", "actuator_ramp"), "K_U") if len(models) <= 1 else [
+        f.estimates["K_U"] for f in step if "model: lag" in f.notes]
+    if gains:
+        K = _combined(result, gains, "K_U")
+        tau = _combined(result, _pick(fits, ("actuator_step", "actuator_ramp"), "tau"), "tau")
+        if model == "lag" and tau.value < MIN_LAG_S:
+            model = "gain"
+        result.bench["actuator.model"] = Parameter(model, "", None, K.source)
+        result.bench["actuator.K_U"] = Parameter(K.value, K.unit, K, K.source)
+        result.bench["actuator.tau"] = Parameter(0.0 if model == "gain" else tau.value, "s", tau, tau.source)
+    else:
+        origin = f"base profile {result.base}"
+        result.bench["actuator.model"] = Parameter(base.actuator.model, "", None, origin)
+        result.bench["actuator.K_U"] = Parameter(base.actuator.K_U, "N/V", None, origin)
+        result.bench["actuator.tau"] = Parameter(base.actuator.tau, "s", None, origin)
+    # the step first: its held levels pin the dead zone once the lag has settled, where in a ramp the
+    # lag, the dead zone and any hysteresis all shift the same edges
+    dz = _pick(fits, ("actuator_step", "actuator_ramp"), "dead_zone")
+    if dz:
+        est = _combined(result, dz, "dead zone")
+        result.bench["actuator.dead_zone_V"] = Parameter(max(est.value, 0.0), "V", est, est.source)
+    else:
+        result.bench["actuator.dead_zone_V"] = Parameter(base.actuator.dead_zone_V, "V", None,
+                                                         f"base profile {result.base}")
+    result.bench["actuator.force_limit_N"] = Parameter(base.actuator.force_limit_N, "N", None,
+                                                       f"base profile {result.base} (not identified)")
+
+
+def _sensors(result: Identification, base: BenchProfile, k_s: float) -> None:
+    rho = _pick(result.fits, ("coast_down",), "rho")
+    if rho:
+        r = _combined(result, rho, "rho = K_s / K_s_dot")
+        ks = result.bench["sensors.s"].estimate
+        ks_se = ks.se if ks else 0.0
+        value = k_s / r.value
+        se = value * math.hypot(ks_se / k_s, r.se / r.value)
+        dof = welch([(value * ks_se / k_s, ks.dof if ks else math.inf), (value * r.se / r.value, r.dof)])
+        est = normal(value, se, "V/(m/s)", f"K_s / rho; {r.method}", r.source, dof)
+        result.bench["sensors.s_dot"] = Parameter(value, est.unit, est, est.source)
+    else:
+        result.bench["sensors.s_dot"] = Parameter(base.sensors.s_dot, "V/(m/s)", None, f"base profile {result.base}")
+    for s in ("s", "theta", "s_dot"):
+        found = _pick(result.fits, ("quiet",), f"noise_{s}")
+        if found:
+            est = _combined(result, found, f"noise on {s}")
+            result.bench[f"sensors.noise_V_rms.{s}"] = Parameter(est.value, "V", est, est.source)
+        elif s in base.sensors.noise_V_rms:
+            result.bench[f"sensors.noise_V_rms.{s}"] = Parameter(base.sensors.noise_V_rms[s], "V", None,
+                                                                 f"base profile {result.base}")
+    bands = [f.estimates[k] for f in result.fits if f.test == "quiet" for k in f.estimates
+             if k.startswith("bandwidth_")]
+    resolved = [b for b in bands if b.high > b.low]
+    if resolved:
+        est = _combined(result, resolved, "noise bandwidth")
+        result.bench["sensors.noise_bandwidth_Hz"] = Parameter(est.value, "Hz", est, est.source)
+    elif bands:
+        top = max(bands, key=lambda b: b.value)
+        result.bench["sensors.noise_bandwidth_Hz"] = Parameter(top.value, "Hz", None,
+                                                               f"{top.source}: at least half the sample rate")
+        result.warnings.append("the quiet recordings do not resolve the noise's bandwidth (white at their rate): "
+                               "the profile takes half the sample rate with the in-band level (the same density)")
+    else:
+        result.bench["sensors.noise_bandwidth_Hz"] = Parameter(base.sensors.noise_bandwidth_Hz, "Hz", None,
+                                                               f"base profile {result.base}")
+
+
+def _plant(result: Identification, mass: Masses | None, mass_src: str) -> None:
+    fits, plant = result.fits, result.plant
+    if mass is not None:
+        plant["M"] = Parameter(mass.M_kg, "kg", None, mass_src)
+        plant["m"] = Parameter(mass.m_kg, "kg", None, mass_src)
+        plant["g"] = Parameter(mass.g_m_per_s2, "m/s^2", None, mass_src)
+    lengths = _pick(fits, ("free_swing",), "l")
+    if lengths:
+        est = _combined(result, lengths, "l")
+        plant["l"] = Parameter(est.value, "m", est, est.source)
+    decay = _pick(fits, ("coast_down",), "decay")
+    if decay and mass is not None:
+        a = _combined(result, decay, "b_VF / (M + m)")
+        total, total_se = mass.M_kg + mass.m_kg, math.hypot(mass.M_uncertainty_kg, mass.m_uncertainty_kg)
+        est = normal(a.value * total, math.hypot(a.se * total, a.value * total_se), "kg/s", a.method, a.source,
+                     welch([(a.se * total, a.dof), (a.value * total_se, math.inf)]))
+        plant["b_VF"] = Parameter(est.value, "kg/s", est, est.source)
+        for f in fits:
+            if f.test == "coast_down" and "coulomb" in f.estimates and "sensors.s_dot" in result.bench:
+                c = f.estimates["coulomb"]
+                k = float(result.bench["sensors.s_dot"].value)
+                result.extra[f"coulomb_N ({f.source})"] = normal(c.value * total / k, c.se * total / k, "N",
+                                                                 c.method, f.source, c.dof)
+    elif decay:
+        result.warnings.append("the coast-down gives b_VF / (M + m): a masses file (test = \"masses\") turns it "
+                               "into b_VF")
+    if "b_VF" not in plant:
+        slides = _pick(fits, ("incline",), "b_VF")
+        if slides:
+            est = _combined(result, slides, "b_VF (incline)")
+            plant["b_VF"] = Parameter(est.value, "kg/s", est, est.source)
+    damping = _pick(fits, ("free_swing",), "c")
+    if damping:
+        est = _combined(result, damping, "c")
+        plant["c"] = Parameter(est.value, "kg m^2/s", est, est.source)
+    elif lengths:
+        result.warnings.append("the free swing gives c / (m l^2): a masses file (test = \"masses\") turns it into c")
+    if mass is not None and mass.d_m is not None:
+        plant["d"] = Parameter(mass.d_m, "m", None, mass_src)
+
+
+def values(params: dict[str, Parameter]) -> dict[str, float | str]:
+    """Dotted name -> value (for tests and the profile writer)."""
+    return {k: p.value for k, p in params.items()}
+
+
+def finite(x: float) -> bool:
+    """Whether x is a finite number."""
+    return bool(np.isfinite(x))

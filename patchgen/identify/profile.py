@@ -1,0 +1,139 @@
+"""The identified bench as a bench profile (bench.toml, which patchgen.profiles.bench.load_bench reads,
+so a spec takes it as ``bench = "path/bench.toml"``) and the plant as a ``[plant]`` table to paste
+into a spec (plant.toml). Each value carries its 95 % interval and origin as a comment.
+
+Values are written to SIGNIFICANT digits, a few more than any interval resolves.
+"""
+
+from __future__ import annotations
+
+import json
+
+from patchgen.identify.identify import Identification, Parameter
+from patchgen.inputs.spec import PlantSpec
+from patchgen.inputs.validation import validate
+from patchgen.profiles.bench import BenchProfile
+
+SIGNIFICANT = 6
+PLANT_ORDER = ("M", "m", "l", "g", "b_VF", "c", "d")
+
+
+def _num(x: float) -> str:
+    text = f"{x:.{SIGNIFICANT}g}"
+    return text if any(ch in text for ch in ".en") else text + ".0"
+
+
+def _line(text: str, comment: str) -> str:
+    return f"{text:<27} # {comment}"
+
+
+def _comment(p: Parameter) -> str:
+    if p.estimate is None:
+        return f"{p.unit}, {p.origin}".strip(", ")
+    e = p.estimate
+    return f"{p.unit}, 95 %: {e.low:.4g} to {e.high:.4g} ({e.source})"
+
+
+def profile_data(result: Identification, base: BenchProfile, bench_id: str, name: str) -> dict:
+    """The bench profile as data (the shape patchgen.profiles.bench.BenchProfile reads).
+
+    Parameters
+    ----------
+    result : Identification
+        What identify found.
+    base : BenchProfile
+        The profile the rest comes from (track, random forces).
+    bench_id, name : str
+        The new profile's id and name.
+
+    Returns
+    -------
+    dict
+        Checked by BenchProfile: a bug, not bad input, if it fails.
+    """
+    b = result.bench
+    act = {k.removeprefix("actuator."): p.value for k, p in b.items() if k.startswith("actuator.")}
+    noise = {k.rsplit(".", 1)[1]: p.value for k, p in b.items() if k.startswith("sensors.noise_V_rms.")}
+    sens = {"s": b["sensors.s"].value, "theta": b["sensors.theta"].value, "s_dot": b["sensors.s_dot"].value,
+            "noise_V_rms": noise, "noise_bandwidth_Hz": b["sensors.noise_bandwidth_Hz"].value}
+    data = {"id": bench_id, "name": name, "actuator": act, "sensors": sens,
+            "track": base.track.model_dump(), "disturbance": base.disturbance.model_dump()}
+    data = json.loads(json.dumps(data), parse_float=lambda s: float(f"{float(s):.{SIGNIFICANT}g}"))
+    validate(BenchProfile, data, "the identified bench")
+    return data
+
+
+def bench_toml(result: Identification, base: BenchProfile, bench_id: str, name: str, sources: list[str]) -> str:
+    """bench.toml: the identified bench profile with each value's interval and origin.
+
+    Parameters
+    ----------
+    result : Identification
+        What identify found.
+    base : BenchProfile
+        The profile the rest comes from.
+    bench_id, name : str
+        The new profile's id and name.
+    sources : list of str
+        The recordings, named in the header.
+
+    Returns
+    -------
+    str
+        TOML text load_bench reads.
+    """
+    data = profile_data(result, base, bench_id, name)
+    b = result.bench
+    out = ["# A bench profile identified by patchgen identify from " + ", ".join(sources) + ".",
+           "# Intervals are 95 %; docs/identify.md says how each value was fitted.",
+           f"# Not identified (from the base profile {base.id}): the force limit, the track, the random forces.",
+           "", f"id = {json.dumps(bench_id)}", f"name = {json.dumps(name)}",
+           "recordings = [", *(f"    {json.dumps(s)}," for s in sources), "]", "", "[actuator]"]
+    for key in ("model", "K_U", "tau", "dead_zone_V", "force_limit_N"):
+        p = b[f"actuator.{key}"]
+        v = data["actuator"][key]
+        out.append(_line(f"{key} = {json.dumps(v) if isinstance(v, str) else _num(v)}", _comment(p)))
+    out += ["", "[sensors]"]
+    for key in ("s", "theta", "s_dot"):
+        out.append(_line(f"{key} = {_num(data['sensors'][key])}", _comment(b[f"sensors.{key}"])))
+    noise = data["sensors"]["noise_V_rms"]
+    out.append("noise_V_rms = { " + ", ".join(f"{k} = {_num(v)}" for k, v in noise.items()) + " }")
+    for k in noise:
+        out.append(f"#   {k}: {_comment(b[f'sensors.noise_V_rms.{k}'])}")
+    out.append(_line(f"noise_bandwidth_Hz = {_num(data['sensors']['noise_bandwidth_Hz'])}",
+                     _comment(b["sensors.noise_bandwidth_Hz"])))
+    out += ["", "[track]", f"limit_switches = {'true' if data['track']['limit_switches'] else 'false'}",
+            "", "[disturbance]   # assumed levels, as the base profile's"]
+    for k, v in data["disturbance"].items():
+        out.append(f"{k} = {_num(v)}")
+    return "\n".join(out) + "\n"
+
+
+def plant_toml(result: Identification, sources: list[str]) -> str:
+    """plant.toml: a ``[plant]`` table with what was measured and identified, to paste into a spec.
+
+    Parameters
+    ----------
+    result : Identification
+        What identify found.
+    sources : list of str
+        The recordings, named in the header.
+
+    Returns
+    -------
+    str
+        TOML text; a comment names any parameter no recording gave (the spec must supply it).
+    """
+    p = result.plant
+    missing = [k for k in ("M", "m", "l", "b_VF", "c") if k not in p]
+    out = ["# The plant identified by patchgen identify from " + ", ".join(sources) + ".",
+           "# Paste the [plant] table into a spec; intervals are 95 %."]
+    if missing:
+        out.append(f"# Not given by the recordings (the spec must supply them): {', '.join(missing)}.")
+    else:
+        validate(PlantSpec, {k: float(f"{p[k].value:.{SIGNIFICANT}g}") for k in p}, "the identified plant")
+    out += ["", "[plant]"]
+    for k in PLANT_ORDER:
+        if k in p:
+            out.append(_line(f"{k} = {_num(float(p[k].value))}", _comment(p[k])))
+    return "\n".join(out) + "\n"

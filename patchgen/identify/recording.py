@@ -1,0 +1,295 @@
+"""A recording of one standard bench test: a CSV file whose first line names the test and whose
+header names every column with its unit, read and checked into arrays.
+
+::
+
+    # test = actuator_step
+    # cart held against a force gauge     (further comment lines are kept as notes)
+    t_s, u_c_V, force_N
+    0.000, 0.0, 0.013
+    ...
+
+A column is ``<quantity>_<unit>``: t (s), u_c (V), force (N), s (V read on the pot, or m set
+by hand), theta (V, or rad set by hand), s_dot (V, the tachometer), out (V, an amplifier's
+output). Every test takes the columns in ``TESTS``; a column of a known quantity that a test does
+not take is left aside, an unknown quantity or a known one in another unit is an error. The time
+column rises by one sample interval (within ``CLOCK_TOLERANCE``) from line to line. docs/identify.md
+says what to record for each test.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import stat
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from patchgen.inputs.errors import InputError
+
+MAX_RECORDING_BYTES = 64 << 20  # 64 MiB: ten minutes of four channels at 2 kHz is some 40 MB of text
+CLOCK_TOLERANCE = 0.01  # a sample interval may differ from the median by 1 %: a recorder's clock, not a gap
+
+QUANTITIES = {  # quantity -> the units it may be recorded in, and what it is
+    "t": (("s",), "time"),
+    "u_c": (("V",), "the actuator's command voltage"),
+    "force": (("N",), "the force on the cart read on a force gauge"),
+    "s": (("V", "m"), "the cart position: the pot's voltage (V) or a position set by hand (m)"),
+    "theta": (("V", "rad"), "the pendulum angle: the pot's voltage (V) or an angle set by hand (rad)"),
+    "s_dot": (("V",), "the tachometer's voltage"),
+    "out": (("V",), "an amplifier's output"),
+}
+
+
+@dataclass(frozen=True)
+class TestKind:
+    """What one standard test records: its columns (name_unit), the fewest samples it needs and
+    what it identifies. ``any_of`` are columns of which at least one is needed."""
+
+    name: str
+    required: tuple[str, ...]
+    optional: tuple[str, ...] = ()
+    any_of: tuple[str, ...] = ()
+    min_samples: int = 200
+    identifies: str = ""
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """Every column the test takes."""
+        return self.required + self.optional + self.any_of
+
+
+TESTS = {t.name: t for t in (
+    TestKind("calibration", (), optional=("s_m", "s_V", "theta_rad", "theta_V"), min_samples=3,
+             identifies="sensor constants (V/m, V/rad) from positions and angles set by hand"),
+    TestKind("actuator_step", ("t_s", "u_c_V", "force_N"), min_samples=200,
+             identifies="K_U, the lag tau, a zero at the origin or not, a second-order term or not"),
+    TestKind("actuator_ramp", ("t_s", "u_c_V", "force_N"), min_samples=200,
+             identifies="the dead zone and any hysteresis"),
+    TestKind("coast_down", ("t_s", "s_V", "s_dot_V"), min_samples=100,
+             identifies="b_VF / (M + m), Coulomb friction when the data show it, the tachometer constant"),
+    TestKind("free_swing", ("t_s", "theta_V"), min_samples=500,
+             identifies="the effective length l from the period, c from the decay"),
+    TestKind("quiet", ("t_s",), any_of=("s_V", "theta_V", "s_dot_V"), min_samples=1000,
+             identifies="each sensor's noise level and bandwidth"),
+    TestKind("integrator_drift", ("t_s", "out_V"), min_samples=100,
+             identifies="an integrator's drift rate"),
+)}
+
+_COMMENT = re.compile(r"^#\s*([A-Za-z_][A-Za-z0-9_ -]*?)\s*=\s*(.*?)\s*$")
+
+
+@dataclass(frozen=True)
+class Recording:
+    """One recording, checked: its test, its columns (name_unit -> samples) and its notes."""
+
+    source: str
+    test: str
+    columns: dict[str, np.ndarray]
+    notes: dict[str, str] = field(default_factory=dict)
+    ignored: tuple[str, ...] = ()
+
+    @property
+    def kind(self) -> TestKind:
+        """The test's definition."""
+        return TESTS[self.test]
+
+    @property
+    def dt(self) -> float:
+        """The sample interval (s): the median step of ``t_s``."""
+        return float(np.median(np.diff(self.columns["t_s"])))
+
+    def error(self, column: str, message: str) -> InputError:
+        """An InputError naming this recording's file and ``column``."""
+        return InputError(self.source, column, message)
+
+
+def read_csv_text(path: str | Path) -> str:
+    """The text of a recording file: a regular file of at most MAX_RECORDING_BYTES, UTF-8."""
+    p = str(path)
+    try:
+        st = os.stat(p)
+    except FileNotFoundError:
+        raise InputError(p, "", "no such file") from None
+    except OSError as exc:
+        raise InputError(p, "", f"cannot be read ({exc.strerror or exc})") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(p, "", "is not a regular file, not a recording")
+    if st.st_size > MAX_RECORDING_BYTES:
+        raise InputError(p, "", f"is larger than {MAX_RECORDING_BYTES >> 20} MiB: record fewer samples")
+    try:
+        with open(p, "rb") as fh:
+            data = fh.read(MAX_RECORDING_BYTES + 1)
+    except OSError as exc:
+        raise InputError(p, "", f"cannot be read ({exc.strerror or exc})") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        raise InputError(p, "", f"not UTF-8 text (byte 0x{data[exc.start]:02x} on line {line})") from None
+    if "\0" in text:
+        raise InputError(p, "", "binary data, not a CSV recording")
+    return text.removeprefix("\ufeff")
+
+
+def split_column(name: str) -> tuple[str, str] | None:
+    """(quantity, unit) of a column name, the longest known quantity first; None if unknown."""
+    for q in sorted(QUANTITIES, key=len, reverse=True):
+        if name.startswith(q + "_") and len(name) > len(q) + 1:
+            return q, name[len(q) + 1:]
+    return None
+
+
+def _header(source: str, names: list[str], kind: TestKind) -> tuple[list[str], list[str]]:
+    """The header's columns checked against the test: (used, ignored)."""
+    used, ignored = [], []
+    for n in names:
+        if not n:
+            raise InputError(source, "header", "an empty column name (a stray comma?)")
+        if names.count(n) > 1:
+            raise InputError(source, n, "named twice in the header")
+        parts = split_column(n)
+        if parts is None:
+            raise InputError(source, n, "unknown column: name it <quantity>_<unit>, the quantity one of "
+                                        + ", ".join(QUANTITIES))
+        q, unit = parts
+        units, what = QUANTITIES[q]
+        if unit not in units:
+            wanted = [c for c in kind.columns if split_column(c)[0] == q]
+            expect = " or ".join(wanted) if wanted else " or ".join(f"{q}_{u}" for u in units)
+            raise InputError(source, n, f"unit {unit!r} is not one {q} is recorded in ({what}): "
+                                        f"write {expect}")
+        (used if n in kind.columns else ignored).append(n)
+    for n in kind.required:
+        if n not in names:
+            raise InputError(source, n, f"missing column (the {kind.name} test records "
+                                        f"{', '.join(kind.required + kind.any_of + kind.optional)})")
+    if kind.any_of and not any(n in names for n in kind.any_of):
+        raise InputError(source, kind.any_of[0], f"missing column: the {kind.name} test records at least one "
+                                                 f"of {', '.join(kind.any_of)}")
+    return used, ignored
+
+
+def parse_recording(text: str, source: str) -> Recording:
+    """A recording from its text.
+
+    Parameters
+    ----------
+    text : str
+        The CSV text: ``# test = <name>`` first, other comment lines, the header, then numbers.
+    source : str
+        The file, named in errors.
+
+    Returns
+    -------
+    Recording
+        The checked recording (columns, sample count, clock, per-test pairs; not the excitation,
+        which each test's fit checks).
+
+    Raises
+    ------
+    InputError
+        One line naming the file and the column (or line) at fault.
+    """
+    lines = text.splitlines()
+    notes: dict[str, str] = {}
+    i = 0
+    while i < len(lines) and (not lines[i].strip() or lines[i].lstrip().startswith("#")):
+        m = _COMMENT.match(lines[i].strip())
+        if m:
+            notes[m.group(1).strip()] = m.group(2)
+        i += 1
+    test = notes.pop("test", None)
+    if test is None:
+        raise InputError(source, "test", "missing: the first line names the test, e.g. '# test = actuator_step' "
+                                         f"(one of {', '.join(TESTS)})")
+    if test not in TESTS:
+        raise InputError(source, "test", f"unknown test {test!r} (one of {', '.join(TESTS)})")
+    kind = TESTS[test]
+    if i >= len(lines):
+        raise InputError(source, "header", "missing: a line naming the columns, e.g. "
+                                           + (", ".join(kind.required) or "s_m, s_V"))
+    names = [n.strip() for n in lines[i].split(",")]
+    used, ignored = _header(source, names, kind)
+    rows = [(k + 1, ln) for k, ln in enumerate(lines) if k > i and ln.strip() and not ln.lstrip().startswith("#")]
+    if len(rows) < kind.min_samples:
+        raise InputError(source, names[0], f"too few samples: {len(rows)}, the {test} test needs at least "
+                                           f"{kind.min_samples}")
+    data = np.empty((len(rows), len(names)))
+    for r, (line, ln) in enumerate(rows):
+        cells = ln.split(",")
+        if len(cells) != len(names):
+            raise InputError(source, f"line {line}", f"{len(cells)} values, the header names {len(names)}")
+        for c, cell in enumerate(cells):
+            try:
+                v = float(cell)
+            except ValueError:
+                raise InputError(source, names[c], f"line {line}: {cell.strip()!r} is not a number") from None
+            if not math.isfinite(v):
+                raise InputError(source, names[c], f"line {line}: {cell.strip()!r} is not a finite number")
+            data[r, c] = v
+    columns = {n: data[:, names.index(n)].copy() for n in used}
+    rec = Recording(source, test, columns, notes, tuple(ignored))
+    _check_clock(rec)
+    _check_pairs(rec)
+    return rec
+
+
+def _check_clock(rec: Recording) -> None:
+    if "t_s" not in rec.columns:
+        return
+    t = rec.columns["t_s"]
+    step = np.diff(t)
+    if np.any(step <= 0):
+        k = int(np.argmax(step <= 0))
+        raise rec.error("t_s", f"does not rise at sample {k + 2} ({t[k]:g} s then {t[k + 1]:g} s)")
+    dt = float(np.median(step))
+    off = np.abs(step - dt) > CLOCK_TOLERANCE * dt
+    if np.any(off):
+        k = int(np.argmax(off))
+        raise rec.error("t_s", f"the sample interval is {dt:g} s but {step[k]:g} s at {t[k]:g} s: "
+                               "record at a steady rate (a gap splits the recording in two files)")
+
+
+def _check_pairs(rec: Recording) -> None:
+    if rec.test != "calibration":
+        return
+    pairs = (("s_m", "s_V"), ("theta_rad", "theta_V"))
+    if not any(a in rec.columns or b in rec.columns for a, b in pairs):
+        raise rec.error("s_m", "missing columns: a calibration records s_m with s_V, theta_rad with theta_V, "
+                               "or both pairs")
+    for a, b in pairs:
+        if (a in rec.columns) != (b in rec.columns):
+            have, lack = (a, b) if a in rec.columns else (b, a)
+            raise rec.error(lack, f"missing column: {have} is calibrated against {lack}")
+
+
+def read_recording(path: str | Path) -> Recording:
+    """Read and check a CSV recording (see the module docstring and docs/identify.md)."""
+    return parse_recording(read_csv_text(path), str(path))
+
+
+def expand(paths: list[str]) -> list[str]:
+    """The files to read: a folder stands for its .csv and .toml files, in name order.
+
+    Raises
+    ------
+    InputError
+        A path that does not exist, or a folder with no recording in it.
+    """
+    out: list[str] = []
+    for p in paths:
+        path = Path(p)
+        if path.is_dir():
+            found = sorted(str(f) for f in path.iterdir() if f.suffix in (".csv", ".toml") and f.is_file())
+            if not found:
+                raise InputError(p, "", "a folder with no recording (.csv) or test figures (.toml) in it")
+            out.extend(found)
+        elif not path.exists():
+            raise InputError(p, "", "no such file or folder")
+        else:
+            out.append(str(path))
+    return out

@@ -1,0 +1,89 @@
+"""record, identify, design, patch, predict: `patchgen bench-test` then `patchgen identify` from the
+command line, and the fitted profile as a drop-in bench for the other commands."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tomllib
+
+import pytest
+
+from patchgen.profiles.bench import load_bench
+from tests.conftest import ROOT
+from tests.identify.benches import TRUE_PLANT, bench_toml, spec_toml
+
+
+def run(*args, cwd=ROOT):
+    return subprocess.run([sys.executable, "-m", "patchgen", *args], capture_output=True, text=True, cwd=cwd)
+
+
+@pytest.fixture(scope="module")
+def fitted(tmp_path_factory):
+    """bench-test on the test bench and plant, then identify the folder whole."""
+    tmp = tmp_path_factory.mktemp("e2e")
+    spec = spec_toml(tmp / "true.toml", str(bench_toml(tmp / "true-bench.toml")))
+    r = run("bench-test", str(spec), "--seed", "5", "-o", str(tmp / "rec"))
+    assert r.returncode == 0, r.stderr
+    r = run("identify", str(tmp / "rec"), "-o", str(tmp / "fit"), "--json")
+    assert r.returncode == 0, r.stderr
+    return tmp, json.loads(r.stdout)
+
+
+def test_bench_test_writes_every_standard_test_and_is_deterministic(fitted, tmp_path):
+    tmp, _ = fitted
+    names = sorted(p.name for p in (tmp / "rec").iterdir())
+    assert names == sorted(["masses.toml", "calibration.csv", "actuator-step.csv", "actuator-ramp.csv",
+                            "coast-down-1.csv", "coast-down-2.csv", "incline.toml", "free-swing.csv", "quiet.csv",
+                            "integrator-drift.csv"])
+    r = run("bench-test", str(tmp / "true.toml"), "--seed", "5", "-o", str(tmp_path / "again"))
+    assert r.returncode == 0, r.stderr
+    for n in names:  # same spec and seed, same bytes
+        assert (tmp_path / "again" / n).read_bytes() == (tmp / "rec" / n).read_bytes(), n
+    r = run("bench-test", str(tmp / "true.toml"), "--seed", "6", "-o", str(tmp_path / "other"))
+    assert (tmp_path / "other" / "quiet.csv").read_bytes() != (tmp / "rec" / "quiet.csv").read_bytes()
+
+
+def test_identify_writes_a_profile_and_a_plant_table_that_read_back(fitted):
+    tmp, report = fitted
+    fit = tmp / "fit"
+    for f in ("bench.toml", "plant.toml", "report.md", "report.json"):
+        assert (fit / f).is_file(), f
+    assert {p.name for p in fit.glob("fit-*.png")} >= {"fit-actuator-step.png", "fit-free-swing.png"}
+    bench = load_bench(str(fit / "bench.toml"))
+    assert bench.actuator.K_U == pytest.approx(11.0, rel=0.02) and bench.actuator.tau == pytest.approx(0.3, rel=0.05)
+    assert len(bench.recordings) == 10 and all(r.startswith(str(tmp / "rec")) for r in bench.recordings)
+    plant = tomllib.loads((fit / "plant.toml").read_text())["plant"]
+    assert plant["l"] == pytest.approx(TRUE_PLANT.l, rel=0.01) and plant["b_VF"] == pytest.approx(3.5, rel=0.1)
+    low, high = report["bench"]["actuator.K_U"]["interval_95"]
+    assert low < report["bench"]["actuator.K_U"]["value"] < high and low <= 11.0 <= high
+
+
+def test_the_fitted_bench_predicts_what_the_true_bench_does(fitted):
+    """The fitted profile and plant as a drop-in: simulate on them and on the truth, same seeds."""
+    tmp, _ = fitted
+    plant = (tmp / "fit" / "plant.toml").read_text()
+    spec = spec_toml(tmp / "fitted.toml", str(tmp / "fit" / "bench.toml"), plant=plant[plant.index("\n[plant]") + 1:])
+    out = {}
+    for name in ("true", "fitted"):
+        r = run("simulate", str(tmp / f"{name}.toml"), "--scenario", "finger-push", "--runs", "8",
+                "-o", str(tmp / f"sim-{name}"), "--json")
+        assert r.returncode == 0, r.stderr
+        out[name] = json.loads(r.stdout)["distribution"]
+    assert out["fitted"]["fraction_held"] == out["true"]["fraction_held"]
+    assert out["fitted"]["fraction_tripped"] == out["true"]["fraction_tripped"]
+    for q in ("max_abs_theta_deg", "rms_theta_deg"):
+        assert out["fitted"]["percentiles"][q]["p50"] == pytest.approx(out["true"]["percentiles"][q]["p50"], rel=0.25)
+    r = run("patch", str(spec), "-o", str(tmp / "patch"), "--runs", "4")
+    assert r.returncode == 0, r.stderr
+    sheet = (tmp / "patch" / "patch-sheet.md").read_text()
+    assert "identified bench (identified from 10 recordings in " in sheet and "free-swing.csv" in sheet
+
+
+def test_identify_never_overwrites(fitted):
+    tmp, _ = fitted
+    before = (tmp / "fit" / "bench.toml").read_bytes()
+    r = run("identify", str(tmp / "rec"), "-o", str(tmp / "fit"))
+    assert r.returncode == 2 and "--force" in r.stderr and len(r.stderr.splitlines()) == 1
+    assert (tmp / "fit" / "bench.toml").read_bytes() == before

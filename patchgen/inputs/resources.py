@@ -61,12 +61,13 @@ def resolve(kind: str, name_or_path: str | Path, source: str = "", field: str = 
         What the user gave. Anything that exists, or looks like a path (a suffix, a slash), is a
         path; otherwise a shipped stem.
     source, field : str
-        The file and field that named it, for the error (a profile named in a spec).
+        The file and field that named it, for the error (a profile named in a spec). A relative
+        path is looked for beside ``source`` first, then from the working folder.
 
     Returns
     -------
     Path or Traversable
-        The path as given, or the shipped resource.
+        The path found, or the shipped resource.
 
     Raises
     ------
@@ -75,6 +76,9 @@ def resolve(kind: str, name_or_path: str | Path, source: str = "", field: str = 
     """
     text = str(name_or_path)
     path = Path(text)
+    beside = Path(source).parent / path if source and text and not path.is_absolute() else None
+    if beside is not None and _exists(beside):
+        return beside  # a spec's relative path is read from the spec's own folder first
     if text and (_exists(path) or path.suffix or "/" in text or "\\" in text or "\0" in text):
         return path
     f = folder(kind).joinpath(f"{text}.toml")

@@ -87,3 +87,11 @@ def test_identify_never_overwrites(fitted):
     r = run("identify", str(tmp / "rec"), "-o", str(tmp / "fit"))
     assert r.returncode == 2 and "--force" in r.stderr and len(r.stderr.splitlines()) == 1
     assert (tmp / "fit" / "bench.toml").read_bytes() == before
+
+
+def test_a_spec_names_the_fitted_bench_relative_to_its_own_folder(fitted, tmp_path):
+    tmp, _ = fitted
+    spec = spec_toml(tmp / "beside.toml", "fit/bench.toml")  # tmp/fit/bench.toml, from tmp_path's cwd
+    r = run("simulate", str(spec), "--scenario", "finger-push", "-o", str(tmp_path / "o"), "--json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["bench"] == "identified"

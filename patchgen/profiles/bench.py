@@ -6,8 +6,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
-from patchgen.inputs.fields import InputModel, Real, bounded, zero_or_at_least
 from patchgen.inputs.errors import InputError
+from patchgen.inputs.fields import InputModel, Real, bounded, zero_or_at_least
 from patchgen.inputs.validation import load_profile, validate
 from patchgen.profiles.uncertainty import RANGE_FIELDS, BenchUncertainty, range_problem
 

@@ -17,6 +17,8 @@ import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from patchgen.bench.bench_spread import active_ranges
 from patchgen.bench.simulate import SimResult, simulate
 from patchgen.inputs.scenario import Scenario
@@ -46,6 +48,11 @@ class CornerOutcome:
         """``tau 0.3, dead_zone_V 0.4``."""
         return ", ".join(f"{k} {v:g}" for k, v in self.values.items())
 
+    def held_text(self) -> str:
+        """``64/64 (100.0 %)`` at ``label()``."""
+        o = self.outcome
+        return f"{o.held}/{o.runs} ({100 * o.fraction:.1f} %) at {self.label()}"
+
 
 @dataclass(frozen=True)
 class BenchStudy:
@@ -67,8 +74,10 @@ class BenchStudy:
 
     @property
     def weakest_parameter(self) -> CornerOutcome | None:
-        """The end of a range, the others at the profile's values, held least (None: no ends run)."""
-        return min(self.ends, key=lambda c: (c.outcome.fraction, c.outcome.interval[1]), default=None)
+        """The end of a range, the others at the profile's values, held least (ties: the one that
+        takes the cart furthest, by the 95th percentile of max |s|; then the first); None: no ends run."""
+        return min(self.ends, key=lambda c: (c.outcome.fraction, c.outcome.interval[1], -cart_excursion(c)),
+                   default=None)
 
     def as_dict(self) -> dict:
         """Plain JSON-ready values."""
@@ -79,6 +88,11 @@ class BenchStudy:
                 "worst_corner": None if w is None else w.as_dict(),
                 "ends": [c.as_dict() for c in self.ends],
                 "weakest_parameter": None if p is None else p.as_dict()}
+
+
+def cart_excursion(c: CornerOutcome) -> float:
+    """The 95th percentile over the runs of max |s| (m): how near the switches the cart came."""
+    return float(np.percentile([r.max_abs_s_m for r in c.outcome.results], 95)) if c.outcome.results else 0.0
 
 
 def corner_values(bench: BenchProfile, ranges: dict[str, tuple[float, float]],
@@ -103,7 +117,8 @@ def _worst_swing(res: SimResult, saturation_V: float) -> float:
 
 def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, scenario: Scenario,
           *, seed: int | None = None, corner_runs: int, drawn: SimResult | None = None, ends: bool = False,
-          ideal: bool = False, progress: Callable[[int, int], None] | None = None) -> BenchStudy:
+          ideal: bool = False, stop_below: int | None = None,
+          progress: Callable[[int, int], None] | None = None) -> BenchStudy:
     """The patch at every corner of the bench's ranges (and each end of each range, if asked).
 
     Parameters
@@ -126,6 +141,9 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
         Also run each end of each range, the others at the profile's values (the weakest parameter).
     ideal : bool
         Every imperfection off (only the ranges an ideal run feels).
+    stop_below : int, optional
+        Stop at the first corner held in fewer runs than this (the study then has fewer corners
+        than the box: a search's candidate already beaten).
     progress : callable, optional
         ``progress(done, total)`` after each corner or end.
 
@@ -149,5 +167,10 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
         return CornerOutcome(values, outcome(scenario.name, res.runs, _worst_swing(res, sat)))
 
     counted = None if drawn is None else outcome(scenario.name, drawn.runs, _worst_swing(drawn, sat))
+    done_corners = []
+    for v in corners:
+        done_corners.append(run(v))
+        if stop_below is not None and done_corners[-1].outcome.held < stop_below:
+            break
     return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
-                      tuple(run(v) for v in corners), rest, tuple(run(v) for v in singles))
+                      tuple(done_corners), rest, tuple(run(v) for v in singles))

@@ -139,7 +139,7 @@ def check_bench(bench: BenchProfile, source: str) -> None:
         field = f"uncertainty.{key}"
         if key not in RANGE_FIELDS:
             raise InputError(source, field, "not a parameter of the bench (its parameters: "
-                             + ", ".join(RANGE_FIELDS) + ")")
+                             + ", ".join(RANGE_FIELDS) + "; the plant's are the spec's, spread with --spread)")
         problem = range_problem(rng)
         if problem:
             raise InputError(source, field, problem)

@@ -69,8 +69,10 @@ class BenchStudy:
 
     @property
     def worst_corner(self) -> CornerOutcome | None:
-        """The corner held least (ties: the lower interval top, then the first)."""
-        return min(self.corners, key=lambda c: (c.outcome.fraction, c.outcome.interval[1]), default=None)
+        """The corner held least (ties: the lower interval top, then the one that takes the cart
+        furthest, by the 95th percentile of max |s|, then the first)."""
+        return min(self.corners, key=lambda c: (c.outcome.fraction, c.outcome.interval[1], -cart_excursion(c)),
+                   default=None)
 
     @property
     def weakest_parameter(self) -> CornerOutcome | None:

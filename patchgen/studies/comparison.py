@@ -15,7 +15,7 @@ from patchgen.render.sheet import SheetSection
 from patchgen.studies.bench_sheet import predicted_patch_files
 from patchgen.studies.ranking import ROUND_RUNS, TARGET
 from patchgen.studies.recommend import CORNER_RUNS, Candidate, Recommendation, chosen_spec
-from patchgen.studies.robust import ALTERNATIVES
+from patchgen.studies.robust import ALTERNATIVES, WHY_GAINS
 
 RECOMMENDED_SPEC = "recommended.toml"
 
@@ -91,7 +91,8 @@ def robust_text(rec: Recommendation) -> str:
         return ""
     b = rec.best
     if b is not None and b.robust_note:
-        used = f"The chosen patch's gains were chosen over the corners of the bench's ranges: {b.robust_note}."
+        used = (f"Against the dead zone and lag, the chosen patch's gains were chosen over the corners of the bench's "
+                f"ranges ({WHY_GAINS}): {b.robust_note}.")
     elif b is not None:
         used = ("The chosen patch keeps the spec's gains: they held at every corner of the bench's ranges "
                 "at least as well as the gains chosen over the corners.")

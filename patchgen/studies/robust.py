@@ -8,7 +8,8 @@ shrinks the limit cycle a dead zone drives; the force's excursion stays the spec
 without the integral of the cart position. Every point that designs and fits the machine is run
 at every corner of the ranges in every scenario, SEARCH_RUNS seeds per corner; the point held best
 at its worst corner wins (ties: the smaller cart excursion over the corners, i.e. the most room
-before the limit switches; then the grid order). A point is dropped as soon as one corner does worse than the best point's worst.
+before the limit switches; then the grid order). A point is dropped as soon as one corner does
+worse than the best point's worst.
 
 Other ways to beat a dead zone, and why a patch here does not use them (``ALTERNATIVES``): dither
 needs a periodic source the machine profiles do not list, and a dead-zone inverse needs diodes or a

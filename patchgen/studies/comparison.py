@@ -154,18 +154,20 @@ def verdict_text(rec: Recommendation) -> str:
 
 def table_markdown(rec: Recommendation, reference_V: float) -> str:
     """The comparison as a Markdown section body: why the first row was chosen."""
+    corner_col = " worst corner of the bench's ranges |" if rec.ranges else ""
     head = ("| rank | realisation | estimator | wired loop on the bench | verdict | held (weakest scenario, 95 % "
-            "interval) | worst corner of the bench's ranges | GM lower / upper (dB) | PM (deg) | worst swing (V) | "
-            "units / amps / pots |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|\n")
+            f"interval) |{corner_col} GM lower / upper (dB) | PM (deg) | worst swing (V) | units / amps / pots |\n"
+            "|---|---|---|---|---|---|---|---|---|---|" + "---|" * bool(rec.ranges) + "\n")
     lines = []
     for r in table_rows(rec):
         if r["error"]:
-            lines.append(f"| - | {r['realisation']} | {r['estimator']} | | not simulated: {r['error']} | | | | | | |")
+            lines.append(f"| - | {r['realisation']} | {r['estimator']} | | not simulated: {r['error']} | | | | | |"
+                         + " |" * bool(rec.ranges))
             continue
+        corner = f" {corner_cell(r)} |" if rec.ranges else ""
         lines.append(
             f"| {r['rank']} | {r['realisation']} | {r['estimator']} | {r['bench_loop']} | {_verdict_words(r)} | "
-            f"{held_cell(r)} | {corner_cell(r)} | {gm_cell(r)} | {fmt_figure(r['pm_deg'], '{:.1f}')} | "
+            f"{held_cell(r)} |{corner} {gm_cell(r)} | {fmt_figure(r['pm_deg'], '{:.1f}')} | "
             f"{r['worst_swing_V']:.2f} of {reference_V:g} | {r['units']} / {r['amplifiers']} / {r['pots']} |")
     names = [sc.name for sc in rec.scenarios]
     per = ("\n\nHeld per scenario (runs held of runs simulated):\n\n| realisation | " + " | ".join(names) + " |\n|---|"

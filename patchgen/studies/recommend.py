@@ -23,7 +23,7 @@ candidate order. Figures are rounded before ranking so the order is deterministi
 When the bench states ranges for its parameters (its ``[uncertainty]`` table), every run draws its
 bench from them, so the held fractions are over the bench's uncertainty; each stable candidate is
 also run at every corner of the ranges and at each end of each range in its weakest scenario
-(CORNER_RUNS seeds each, patchgen.studies.bench_corners), which names its weakest parameter; the
+(ties: the longest; CORNER_RUNS seeds each, patchgen.studies.bench_corners), which names its weakest parameter; the
 worst corner's held fraction ranks right after the verdict, and a candidate is chosen only if it
 held in at least TARGET of the runs at every corner. The candidates then include one whose gains
 are chosen over the corners (patchgen.studies.robust, added by ``extra_candidates``).
@@ -356,7 +356,8 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
             break
     st = None
     if bench.uncertainty.ranges and c.bench_loop == "stable":
-        weak = next(sc for sc in scenarios if sc.name == weakest(outcomes).scenario)
+        held = {o.scenario: (o.fraction, o.interval[1]) for o in outcomes}  # ties: the longest scenario
+        weak = min(scenarios, key=lambda sc: (*held[sc.name], -sc.duration_s))
         st = study(c.netlist, plant, bench, machine, weak, seed=seed, corner_runs=CORNER_RUNS, ends=True)
     return replace(c, outcomes=outcomes, bench_study=st)
 

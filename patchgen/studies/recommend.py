@@ -23,8 +23,8 @@ candidate order. Figures are rounded before ranking so the order is deterministi
 When the bench states ranges for its parameters (its ``[uncertainty]`` table), every run draws its
 bench from them, so the held fractions are over the bench's uncertainty; each stable candidate is
 also run at every corner of the ranges and at each end of each range in its weakest scenario
-(ties: the longest; CORNER_RUNS seeds each, patchgen.studies.bench_corners), which names its weakest parameter; the
-worst corner's held fraction ranks right after the verdict, and a candidate is chosen only if it
+(ties: the longest; CORNER_RUNS seeds each, patchgen.studies.bench_corners), which names its
+weakest parameter; the worst corner's held fraction ranks right after the verdict, and a candidate is chosen only if it
 held in at least TARGET of the runs at every corner. The candidates then include one whose gains
 are chosen over the corners (patchgen.studies.robust, added by ``extra_candidates``).
 """

@@ -108,3 +108,31 @@ def test_recommend_over_the_ranges_reports_corners_weakest_parameters_and_its_ch
     sheet = (out / "patch-sheet.md").read_text()
     assert "Predicted over the bench's ranges" in sheet and "the worst corner held" in sheet
     assert "K_U 11 to 17 N/V" in sheet and "corners of the bench's ranges" in sheet
+
+
+def _study(held: int, runs: int = 64):
+    from patchgen.studies.bench_corners import BenchStudy, CornerOutcome
+
+    from .test_recommend import outcome_of
+
+    corner = CornerOutcome({"dead_zone_V": 0.4}, outcome_of("hold-120s", held, runs))
+    mild = CornerOutcome({"dead_zone_V": 0.1}, outcome_of("hold-120s", runs, runs))
+    return BenchStudy("hold-120s", {"dead_zone_V": (0.1, 0.4)}, "uniform", None, (mild, corner), ())
+
+
+def test_the_worst_corner_ranks_after_the_verdict_and_bars_the_choice():
+    """Two candidates that clearly hold over the drawn benches: the one held more at its worst corner
+    ranks first, whatever its margins; one held in under 95 % at a corner is never chosen."""
+    from patchgen.studies.recommend import Recommendation
+
+    from .test_recommend import _cand, _outcomes
+
+    weak = _cand("weak corner", _outcomes((80, 80)), bench_study=_study(50))
+    strong = _cand("strong corner", _outcomes((80, 80)), bench_study=_study(64))
+    assert weak.corner_fraction == 50 / 64 and strong.corner_fraction == 1.0
+    order = [weak, strong]
+    ranked = tuple(sorted(order, key=lambda c: c.rank_key(order.index(c))))
+    assert [c.label for c in ranked] == ["strong corner", "weak corner"]
+    spec = load_spec(design_path("bench-recommended"))
+    assert Recommendation(spec, (HOLD,), 80, None, ranked).best is strong
+    assert Recommendation(spec, (HOLD,), 80, None, (weak,)).best is None

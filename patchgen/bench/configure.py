@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from patchgen.bench import bench_spread as bs
 from patchgen.bench.circuit import Circuit
 from patchgen.bench.engine import EngineConfig, default_step, noise_process
 from patchgen.bench.kernel import (
@@ -25,7 +26,7 @@ from patchgen.bench.noise_drift import noise_and_drift
 from patchgen.bench.results import SimSettings
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
-from patchgen.plant.equations import PlantParams
+from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
@@ -34,7 +35,8 @@ SPREAD_ORDER = ("M", "m", "l", "g", "b_VF", "c", "d")  # PLANT_VECTOR's paramete
 
 def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
                   machine: MachineProfile, scenario: Scenario, *,
-                  ideal: bool = False, spread: dict[str, float] | None = None) -> tuple[EngineConfig, SimSettings]:
+                  ideal: bool = False, spread: dict[str, float] | None = None,
+                  bench_spread: bool = False) -> tuple[EngineConfig, SimSettings]:
     """Resolve profiles, scenario and ``ideal`` into the engine's records, and a readable account.
 
     Parameters
@@ -51,6 +53,9 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         Every imperfection off (see patchgen.bench.simulate).
     spread : dict of str to float, optional
         Per plant parameter (SPREAD_ORDER's names), the fraction within which each run draws it.
+    bench_spread : bool
+        Each run draws its bench from the profile's ``[uncertainty]`` ranges (those the
+        simulation feels: patchgen.bench.bench_spread.active_ranges).
 
     Returns
     -------
@@ -58,9 +63,10 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         What the engine runs, and what was simulated, in words and SI units.
     """
     spread = dict(spread or {})
+    ranges = bs.active_ranges(bench, ideal, scenario.noise.mode == "profile") if bench_spread else {}
     fastest = [1.0 / v for v in circuit.time_rates() if v > 0]
     if not ideal and bench.actuator.model != "gain":
-        fastest.append(bench.actuator.tau)
+        fastest.append(min(bench.actuator.tau, ranges.get("tau", (math.inf,))[0]))
     step = scenario.dt_s or default_step(fastest, ideal)
     n_steps = max(1, math.ceil(scenario.duration_s / step - 1e-9))
     step = scenario.duration_s / n_steps
@@ -74,6 +80,21 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     a_proc = noise_process(amp_rms, levels.amplifier_bandwidth_Hz, step)
     f_proc = [noise_process(rms, levels.force_bandwidth_Hz, step)
               for rms in (levels.cart_force_N_rms, levels.tip_force_N_rms)]
+    unit_std = {}  # a drawn noise level: the channel's process per unit rms
+    n_ch = circuit.n_sensors + circuit.n_amps
+    for key in ranges:
+        if key.startswith("noise_V_rms."):
+            chans = tuple(i for i, sid in enumerate(circuit.sensor_ids) if sid == key.split(".", 1)[1])
+            unit = noise_process(1.0, levels.sensor_bandwidth_Hz, step)
+            for i in chans:
+                s_proc[i] = (unit[0], s_proc[i][1])
+        elif key in ("cart_force_N_rms", "tip_force_N_rms"):
+            k = 0 if key == "cart_force_N_rms" else 1
+            chans, unit = (n_ch + k,), noise_process(1.0, levels.force_bandwidth_Hz, step)
+            f_proc[k] = (unit[0], f_proc[k][1])
+        else:
+            continue
+        unit_std[key] = (chans, unit[1])
 
     act = bench.actuator
     if ideal:
@@ -109,8 +130,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
             clip=not ideal, limit_switches=bool(bench.track.limit_switches),
             fall_angle=math.radians(scenario.fall_angle_deg), output=int(circuit.output_index),
             x0=np.array(scenario.initial.vector(), dtype=np.float64),
-            actuator=int(model), K_U=float(act.K_U), tau=float(tau), dead_zone=float(dead),
-            force_limit=float(flim)),
+            actuator=int(model)),
         sensors=Sensors(state=_i64(circuit.sensor_state), gain=_f64(circuit.sensor_gain)),
         noise=Noise(a=_f64([p[0] for p in s_proc] + [a_proc[0]] * circuit.n_amps + [p[0] for p in f_proc]),
                     std=_f64([p[1] for p in s_proc] + [a_proc[1]] * circuit.n_amps + [p[1] for p in f_proc])),
@@ -121,6 +141,9 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         disturbances=Disturbances(kind=_i64(kinds), t0=_f64(t0s), t1=_f64(t1s), value=_f64(vals)),
         plant=_f64([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c, plant.d / 2]),
         plant_spread=_f64([spread.get(k, 0.0) for k in SPREAD_ORDER]),
+        actuator=_f64([act.K_U, tau, dead, flim]),
+        bench_spread=bs.plan(ranges, bench.uncertainty.distribution,
+                             tuple(PLANT_STATES[q] for q in circuit.sensor_state), circuit.sensor_ids, unit_std),
     )
     settings = SimSettings(
         dt_s=step, steps=n_steps, record_dt_s=stride * step,
@@ -133,6 +156,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         actuator=act_text, limit_switches=bool(bench.track.limit_switches),
         half_track_m=plant.d / 2,
         plant_spread={k: v for k, v in spread.items() if v},
+        bench_spread={k: list(v) for k, v in ranges.items()},
+        bench_distribution=bench.uncertainty.distribution if ranges else None,
     )
     return cfg, settings
 

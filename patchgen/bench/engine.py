@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from patchgen.bench import kernel
+from patchgen.bench import bench_spread, kernel
 from patchgen.bench.kernel import (
     H_AMPS,
     LANES,
@@ -64,6 +64,8 @@ class EngineConfig:
     disturbances: Disturbances
     plant: np.ndarray  # PLANT_VECTOR of patchgen.plant.compiled: M, m, l, g, b_VF, c, half track
     plant_spread: np.ndarray  # per plant parameter: each run draws it uniformly within +/- this fraction
+    actuator: np.ndarray  # ACTUATOR_VECTOR of patchgen.bench.lanes: K_U, tau, dead zone, force limit
+    bench_spread: bench_spread.BenchSpread | None = None  # each run's bench drawn from these ranges
 
     @property
     def records(self) -> tuple[Settings, Sensors, Noise, Wiring, Disturbances]:
@@ -143,8 +145,9 @@ def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]) -> Draws:
     """Each run's random draws, from its own generator.
 
     The drift sign of each amplifier, the two 32-bit words that key its noise (drawn in the
-    compiled loop, see patchgen.bench.kernel), then, with a parameter spread, the run's plant. A
-    run's draws depend on nothing but its generator.
+    compiled loop, see patchgen.bench.kernel), then, with a parameter spread, the run's plant,
+    then, with a bench spread, the run's bench (patchgen.bench.bench_spread). A run's draws
+    depend on nothing but its generator.
 
     Parameters
     ----------
@@ -163,13 +166,19 @@ def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]) -> Draws:
     signs = np.empty((runs, n_amp))
     keys = np.empty((runs, 2), dtype=np.uint64)
     plants = np.repeat(cfg.plant[None, :], runs, axis=0)
-    spread = cfg.plant_spread.any()
+    actuators = np.repeat(cfg.actuator[None, :], runs, axis=0)
+    gains = np.repeat(cfg.sensors.gain[None, :], runs, axis=0)
+    noise_std = np.repeat(cfg.noise.std[None, :], runs, axis=0)
+    spread, bench = cfg.plant_spread.any(), cfg.bench_spread
     for r, rng in enumerate(rngs):
         signs[r] = np.where(rng.random(n_amp) < 0.5, 1.0, -1.0)
         keys[r] = rng.integers(0, 2**32, size=2, dtype=np.uint64)
         if spread:
             plants[r] *= 1.0 + cfg.plant_spread * rng.uniform(-1.0, 1.0, cfg.plant.shape[0])
-    return Draws(keys=keys, signs=signs, plants=plants)
+        if bench is not None:
+            bench_spread.apply(bench, bench_spread.draw(bench, rng), actuators[r], gains[r], noise_std[r])
+    return Draws(keys=keys, signs=signs, plants=plants, actuators=actuators, sensor_gains=gains,
+                 noise_std=noise_std)
 
 
 def run_batch(cfg: EngineConfig, draws: Draws, n_history: int) -> BatchOutput:

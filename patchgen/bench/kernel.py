@@ -36,13 +36,13 @@ import numba as nb
 import numpy as np
 
 from patchgen.bench.circuit import DIFFERENTIATOR
-from patchgen.bench.lanes import circuit, drive
+from patchgen.bench.lanes import N_ACTUATOR, circuit, drive
 from patchgen.bench.noise import WORDS, fill_normals
 from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "e055ba30ec43920f"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_IN = "65fe8d099ab5a6fa"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 64  # runs per block
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 N_STATES = len(PLANT_STATES)
@@ -69,6 +69,9 @@ class Draws(NamedTuple):
     keys: np.ndarray  # (runs, 2) uint64: the key of the run's counter-based noise
     signs: np.ndarray  # (runs, amplifiers) +/-1: which way each amplifier drifts
     plants: np.ndarray  # (runs, len(PLANT_VECTOR)): the run's plant
+    actuators: np.ndarray  # (runs, N_ACTUATOR): the run's actuator, ACTUATOR_VECTOR of patchgen.bench.lanes
+    sensor_gains: np.ndarray  # (runs, sensors): the run's sensor constants, V per SI unit
+    noise_std: np.ndarray  # (runs, channels): the run's innovation std of each noise channel (see Noise)
 
 
 class Settings(NamedTuple):
@@ -84,15 +87,12 @@ class Settings(NamedTuple):
     fall_angle: float  # rad
     output: int  # signal index of the control voltage u_c
     x0: np.ndarray  # plant state at t = 0
-    actuator: int  # model: ACT_* of patchgen.bench.lanes
-    K_U: float  # N/V
-    tau: float  # s
-    dead_zone: float  # V
-    force_limit: float  # N
+    actuator: int  # model: ACT_* of patchgen.bench.lanes (its values are each run's, in Draws)
 
 
 class Sensors(NamedTuple):
-    """Per sensor: the plant state it reads (index) and its gain (V per SI unit)."""
+    """Per sensor: the plant state it reads (index) and its nominal gain (V per SI unit; each
+    run's own is in Draws)."""
 
     state: np.ndarray
     gain: np.ndarray
@@ -100,7 +100,7 @@ class Sensors(NamedTuple):
 
 class Noise(NamedTuple):
     """Per channel (the sensors, the amplifiers, then the random forces on the cart and at the
-    tip, N): held noise n' = a n + std w."""
+    tip, N): held noise n' = a n + std w (std nominal; each run's own is in Draws)."""
 
     a: np.ndarray
     std: np.ndarray  # V
@@ -158,6 +158,9 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     ns, na = sensors.state.shape[0], wiring.kind.shape[0]
     nch = noise.a.shape[0]  # ns + na voltages, then the two forces
     pc = np.empty((N_COEF, nl))
+    act = np.empty((N_ACTUATOR, nl))  # each lane's actuator, sensor gains and noise levels
+    gain = np.empty((ns, nl))
+    nstd = np.empty((nch, nl))
     half = np.empty(nl)
     k0 = np.empty(nl, dtype=np.uint64)
     k1 = np.empty(nl, dtype=np.uint64)
@@ -168,6 +171,12 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
         plant_coefficients(plants[lo + l], pc[:, l])
         half[l] = plants[lo + l, P_HALF_TRACK]
         k0[l], k1[l] = keys[lo + l, 0], keys[lo + l, 1]
+        for i in range(N_ACTUATOR):
+            act[i, l] = draws.actuators[lo + l, i]
+        for i in range(ns):
+            gain[i, l] = draws.sensor_gains[lo + l, i]
+        for c in range(nch):
+            nstd[c, l] = draws.noise_std[lo + l, c]
         for j in range(na):
             drift[j, l] = wiring.drift[j] * signs[lo + l, j]
             za[j, l] = wiring.ic[j]
@@ -177,12 +186,12 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     rows = (nch + WORDS - 1) // WORDS * WORDS
     z = np.empty((rows, nl))
     words = np.empty((WORDS, nl), dtype=np.uint64)
-    noisy = np.any(noise.std > 0.0)
+    noisy = np.any(nstd > 0.0)
     if noisy:  # start the noise in its stationary distribution
         fill_normals(0, k0, k1, z, words)
         for c in range(nch):
             for l in range(nl):
-                nz[c, l] = z[c, l] * noise.std[c] / math.sqrt(1.0 - noise.a[c] * noise.a[c])
+                nz[c, l] = z[c, l] * nstd[c, l] / math.sqrt(1.0 - noise.a[c] * noise.a[c])
     sig = np.zeros((nch + 1, nl))  # signals, and a row of zeros (the input of an unwired amplifier)
     raw = np.zeros((na, nl))
     kp = np.zeros((4, N_STATES, nl))  # RK4 slopes of the plant, amplifier and actuator states
@@ -197,7 +206,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     # filter state to its input, in evaluation order (one pass per amplifier reaches every chain)
     quiet = np.zeros((nch, nl))
     for _ in range(na):
-        circuit(xp, za, 0.0, quiet, sensors, wiring, drift, sat, False, sig, raw, ka, 0, acc)
+        circuit(xp, za, 0.0, quiet, sensors.state, gain, wiring, drift, sat, False, sig, raw, ka, 0, acc)
         for j in range(na):
             if wiring.kind[j] == DIFFERENTIATOR:
                 for l in range(nl):
@@ -215,14 +224,14 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
         if noisy and n > 0:  # new noise for this step
             fill_normals(n, k0, k1, z, words)
             for c in range(nch):
-                a, s = noise.a[c], noise.std[c]
+                a = noise.a[c]
                 for l in range(nl):
-                    nz[c, l] = a * nz[c, l] + s * z[c, l]
+                    nz[c, l] = a * nz[c, l] + nstd[c, l] * z[c, l]
         f_cart, f_tip, s_ref = _disturbances(disturbances, t, h)
         for st in range(4):
             _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat)
-            circuit(xt, zt, s_ref, nz, sensors, wiring, drift, sat, clip, sig, raw, ka, st, acc)
-            drive(xt, xat, sig, out_index, tripped, pc, settings, f_cart, f_tip, nz, kp, kx, forces, st)
+            circuit(xt, zt, s_ref, nz, sensors.state, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
+            drive(xt, xat, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, forces, st)
             if st == 0:  # record and summarise time t; a run ends at the scenario's end or at a trip
                 for l in range(n_hist):
                     if alive[l] and (n % stride == 0 or n == n_steps or tripped[l]):

@@ -16,6 +16,9 @@ from patchgen.plant.compiled import plant_accel, sincos
 from patchgen.plant.equations import PLANT_STATES
 
 ACT_GAIN, ACT_LAG, ACT_LAG_ZERO = 0, 1, 2
+ACTUATOR_VECTOR = ("K_U", "tau", "dead_zone", "force_limit")  # a run's actuator: N/V, s, V, N
+A_K_U, A_TAU, A_DEAD_ZONE, A_FORCE_LIMIT = range(len(ACTUATOR_VECTOR))
+N_ACTUATOR = len(ACTUATOR_VECTOR)
 S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
 _JIT = {"cache": True, "error_model": "numpy"}  # as patchgen.bench.kernel's
 
@@ -41,21 +44,21 @@ def _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc):
 
 
 @nb.njit(**_JIT)
-def circuit(X, Z, s_ref, nz, sensors, wiring, drift, sat, clip, sig, raw, dz, st, acc):
+def circuit(X, Z, s_ref, nz, sensor_state, sensor_gain, wiring, drift, sat, clip, sig, raw, dz, st, acc):
     """Sensors and amplifiers in evaluation order: sig (clipped if clip; its last row stays 0),
     raw (before clipping), and the amplifier state derivatives into dz[st] (a summer's stay 0).
-    sensors, wiring: patchgen.bench.kernel's Sensors and Wiring; X, Z, nz, drift are per lane."""
-    sensor_state, sensor_gain = sensors.state, sensors.gain
+    sensor_state: the plant state each sensor reads; wiring: patchgen.bench.kernel's Wiring;
+    X, Z, nz, drift and sensor_gain (sensor, lane) are per lane."""
     amp_kind, in_ptr, in_src, in_gain = wiring.kind, wiring.in_ptr, wiring.in_src, wiring.in_gain
     param1, param2 = wiring.param1, wiring.param2
     ns = sensor_state.shape[0]
     nl = acc.shape[1]
     hi = sat if clip else np.inf
     for i in range(ns):
-        q, g = sensor_state[i], sensor_gain[i]
+        q = sensor_state[i]
         ref = s_ref if q == S_INDEX else 0.0
         for l in range(nl):
-            sig[i, l] = g * (X[q, l] - ref) + nz[i, l]
+            sig[i, l] = sensor_gain[i, l] * (X[q, l] - ref) + nz[i, l]
     # outputs in evaluation order (integrators and lags, whose outputs are their states, first)
     for j in range(amp_kind.shape[0]):
         kd, a = amp_kind[j], ns + j
@@ -94,17 +97,17 @@ def circuit(X, Z, s_ref, nz, sensors, wiring, drift, sat, clip, sig, raw, dz, st
 
 
 @nb.njit(**_JIT)
-def drive(X, XA, sig, out_index, tripped, pc, settings, f_cart, f_tip, nz, kp, kx, forces, st):
+def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx, forces, st):
     """Actuator (dead zone, model, force limit; off once tripped) and plant slopes per lane,
-    into kp[st], kx[st], forces[st]. settings: patchgen.bench.kernel's Settings (the actuator's
-    model ACT_*, K_U, tau, dead zone, force limit); X (plant state), XA (actuator state) and pc
+    into kp[st], kx[st], forces[st]. act: the actuator's model ACT_*; ap (ACTUATOR_VECTOR, lane):
+    each lane's K_U, tau, dead zone, force limit; X (plant state), XA (actuator state) and pc
     (plant_coefficients) are per lane. f_cart and f_tip are the scenario's pushes (N); the last
     two rows of nz, the bench's random forces on the cart and at the tip (N), per lane."""
-    act, K_U, tau, dz, flim = settings.actuator, settings.K_U, settings.tau, settings.dead_zone, settings.force_limit
-    inv_tau = 1.0 / tau
     fc, ft = nz.shape[0] - 2, nz.shape[0] - 1
-    ku_tau = K_U / tau
     for l in range(XA.shape[0]):
+        K_U, tau, dz, flim = ap[A_K_U, l], ap[A_TAU, l], ap[A_DEAD_ZONE, l], ap[A_FORCE_LIMIT, l]
+        inv_tau = 1.0 / tau
+        ku_tau = K_U / tau
         u = sig[out_index, l]
         v = u - dz if u > dz else (u + dz if u < -dz else 0.0)
         xa = XA[l]

@@ -33,7 +33,7 @@ class Prediction:
 
 def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
             runs_hold: int = 20, scenarios: tuple[str, ...] = STANDARD,
-            done: dict[str, list[RunSummary]] | None = None) -> list[Prediction]:
+            done: dict[str, list[RunSummary]] | None = None, bench_spread: bool = False) -> list[Prediction]:
     """Each standard scenario on the bench (noise and drift as the profiles say).
 
     The long hold is a small Monte Carlo over noise seeds, the others one run at their own seed.
@@ -50,6 +50,8 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
         Runs already simulated on this patch, bench and machine, by scenario name, from the
         scenario's own seed: run i depends on its seed alone, so their first runs stand in for
         simulating again.
+    bench_spread : bool
+        Each run draws its bench from the profile's ranges (patchgen.bench.bench_spread).
 
     Returns
     -------
@@ -63,7 +65,8 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
         if done is not None and len(done.get(name, ())) >= runs:
             summaries = done[name][:runs]
         else:
-            summaries = simulate(net, plant, bench, machine, sc, runs=runs, keep_history=False).runs
+            summaries = simulate(net, plant, bench, machine, sc, runs=runs, keep_history=False,
+                                 bench_spread=bench_spread).runs
         r0 = summaries[0]
         ovl = sorted({o.amplifier for run in summaries for o in run.overloads})
         out.append(Prediction(name, sc.description, runs, sum(r.held for r in summaries) / runs, r0.trip_time_s,

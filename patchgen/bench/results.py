@@ -4,7 +4,7 @@ simulated, and the first run's history (``SimResult``); built from the engine's 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -86,6 +86,8 @@ class SimSettings:
     limit_switches: bool
     half_track_m: float
     plant_spread: dict[str, float]
+    bench_spread: dict[str, list[float]] = field(default_factory=dict)  # key -> [low, high] each run drew from
+    bench_distribution: str | None = None  # how: uniform or normal (None: no bench spread)
 
 
 @dataclass

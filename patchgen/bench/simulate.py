@@ -48,7 +48,8 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
              scenario: Scenario, *, seed: int | None = None, runs: int = 1, ideal: bool = False,
              keep_history: bool = True,
              progress: Callable[[int], None] | None = None,
-             spread: dict[str, float] | None = None, first_run: int = 0) -> SimResult:
+             spread: dict[str, float] | None = None, first_run: int = 0,
+             bench_spread: bool = False) -> SimResult:
     """Simulate ``runs`` runs of the scenario (seed from the argument, else the scenario's).
 
     Run i draws from ``numpy.random.default_rng([seed, i])`` (drift signs, the key of its
@@ -80,6 +81,9 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
         fractions of the nominal, so the Monte Carlo covers model error as well as noise.
     first_run : int
         The index of the first run (its draws, see above); the history is that run's.
+    bench_spread : bool
+        Each run draws its bench (actuator, sensor constants, noise levels, random forces) from
+        the profile's ``[uncertainty]`` ranges (patchgen.bench.bench_spread), after its other draws.
 
     Returns
     -------
@@ -94,7 +98,8 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
         raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")
     if first_run < 0:
         raise ValueError(f"first_run must be at least 0 (got {first_run})")
-    cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal, spread=spread)
+    cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal, spread=spread,
+                                  bench_spread=bench_spread)
     budget.check(scenario, runs, step=cfg.settings.dt, stride=cfg.settings.stride, history=keep_history,
                  usual_step=default_step([], ideal))
 

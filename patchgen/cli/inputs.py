@@ -14,9 +14,12 @@ from patchgen.profiles.machine import MachineProfile, load_machine
 MAX_SPICE_POINTS = 10**6  # transient points of an ngspice run (duration / --step)
 
 
-def load_inputs(path: str) -> tuple[DesignSpec, MachineProfile, BenchProfile]:
-    """The spec and the machine and bench profiles it names, each fully checked."""
+def load_inputs(path: str, bench: str | None = None) -> tuple[DesignSpec, MachineProfile, BenchProfile]:
+    """The spec and the machine and bench profiles it names, each fully checked; ``bench`` (a
+    shipped id or a path, from ``--bench``) replaces the spec's bench."""
     spec = load_spec(path)
+    if bench is not None:
+        return spec, load_machine(spec.machine, spec.path), load_bench(bench, "--bench", "")
     return spec, load_machine(spec.machine, spec.path), load_bench(spec.bench, spec.path)
 
 

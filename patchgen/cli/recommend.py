@@ -17,6 +17,7 @@ from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.pottable import pot_table
 from patchgen.studies.comparison import (
     RECOMMENDED_SPEC,
+    corner_cell,
     fmt_figure,
     gm_cell,
     held_cell,
@@ -45,9 +46,12 @@ NONE_CHOSEN_STATUS = 1  # the comparison is written, but no realisation holds on
 @click.option("--seed", default=None, type=SEED, help="Base seed of every scenario (default: each scenario's own).")
 @click.option("--all-runs", is_flag=True, help="Run every realisation --runs times on every scenario (no early "
               "stop once a realisation clearly holds or fails).")
+@click.option("--bench", "bench_name", default=None, metavar="BENCH",
+              help="Bench profile (a shipped id or a TOML file) instead of the spec's; when it states ranges for its "
+                   "parameters, every run draws its bench from them and every corner is checked.")
 @click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
-def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, as_json, force):
+def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_name, as_json, force):
     """Run every realisation of SPEC on the bench in every scenario; write the best patch and its spec.
 
     The realisations: every estimator, and each again designed with the bench's actuator when
@@ -56,7 +60,9 @@ def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, as_json, 
     with a wired loop stable on the bench holds in 95 % of the runs of every scenario.
     """
     check_out_dir(out_dir, RECOMMEND_FILES, force)
-    sp, machine, bench = load_inputs(spec)
+    sp, machine, bench = load_inputs(spec, bench_name)
+    if bench_name is not None:
+        sp = sp.model_copy(update={"bench": bench_name})
     scenarios = tuple(scenario_for(p, sp, runs) for p in (scenario_paths or STANDARD))
     console = Console(stderr=as_json)
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
@@ -86,16 +92,23 @@ def _print_table(console: Console, rec, name: str, runs: int) -> None:
     """The ranked comparison as a terminal table."""
     t = Table(title=f"{name}: realisations on the bench ({', '.join(sc.name for sc in rec.scenarios)}; "
               f"up to {runs} seeds each)", title_justify="left")
-    for col in ("rank", "realisation", "estimator", "loop on bench", "verdict", "held: weakest scenario [95 %]",
-                "GM lo/up dB", "PM", "swing V", "amps/pots"):
+    cols = ["rank", "realisation", "estimator", "loop on bench", "verdict", "held: weakest scenario [95 %]",
+            "GM lo/up dB", "PM", "swing V", "amps/pots"]
+    if rec.ranges:
+        cols.insert(6, "worst corner of the ranges")
+    for col in cols:
         left = col in ("realisation", "estimator", "verdict", "loop on bench")
         t.add_column(col, justify="left" if left else "right")
     for r in table_rows(rec):
         if r["error"]:
-            t.add_row("-", r["realisation"], r["estimator"], "", f"[red]{escape(r['error'])}[/red]", *[""] * 5)
+            t.add_row("-", r["realisation"], r["estimator"], "", f"[red]{escape(r['error'])}[/red]",
+                      *[""] * (len(cols) - 5))
             continue
         loop = r["bench_loop"] if r["bench_loop"] == "stable" else f"[red]{r['bench_loop']}[/red]"
         verdict = {"holds": "[green]holds[/green]", "fails": "[red]fails[/red]"}.get(r["decision"], r["decision"])
-        t.add_row(str(r["rank"]), r["realisation"], r["estimator"], loop, verdict, held_cell(r), gm_cell(r, "/"),
-                  fmt_figure(r["pm_deg"], "{:.1f}"), f"{r['worst_swing_V']:.2f}", f"{r['amplifiers']}/{r['pots']}")
+        cells = [str(r["rank"]), r["realisation"], r["estimator"], loop, verdict, held_cell(r), gm_cell(r, "/"),
+                 fmt_figure(r["pm_deg"], "{:.1f}"), f"{r['worst_swing_V']:.2f}", f"{r['amplifiers']}/{r['pots']}"]
+        if rec.ranges:
+            cells.insert(6, escape(corner_cell(r)))
+        t.add_row(*cells)
     Console(width=max(160, console.width), stderr=console.stderr).print(t)

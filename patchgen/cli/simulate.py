@@ -14,9 +14,11 @@ from patchgen.bench.files import output_files
 from patchgen.bench.simulate import SimResult, simulate
 from patchgen.design.lqg import design_on
 from patchgen.design.model import plant_params
+from patchgen.inputs.errors import InputError
 from patchgen.patch.build import build_patch
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.studies import bench_corners
 
 from . import cli
 from .inputs import load_inputs, scenario_for
@@ -26,12 +28,12 @@ SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "his
 
 
 def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal, keep_history=True,
-                      quiet=False, spread=None) -> SimResult:
+                      quiet=False, spread=None, bench_spread=False) -> SimResult:
     """patchgen.bench.simulate.simulate with a progress bar on stderr when there is more than one
     run (and not ``quiet``); the arguments are simulate's."""
     if runs <= 1 or quiet:
         return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
-                        keep_history=keep_history, spread=spread)
+                        keep_history=keep_history, spread=spread, bench_spread=bench_spread)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     cols = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
@@ -39,7 +41,7 @@ def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal
     with Progress(*cols, console=Console(stderr=True), transient=True) as prog:
         task = prog.add_task(f"{scenario.name}: Monte Carlo", total=runs)
         return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
-                        keep_history=keep_history, spread=spread,
+                        keep_history=keep_history, spread=spread, bench_spread=bench_spread,
                         progress=lambda done: prog.update(task, completed=done))
 
 
@@ -75,6 +77,30 @@ def summary_table(result: SimResult) -> Table:
     return t
 
 
+def corner_table(st: bench_corners.BenchStudy) -> Table:
+    """The held fraction over drawn benches, at every corner of the ranges, and the worst corner."""
+    ranges = ", ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in st.ranges.items())
+    t = Table(title=f"over the bench's ranges ({st.distribution}: {ranges}); held = up, inside the switches, "
+              "no overload", title_justify="left")
+    t.add_column("bench")
+    t.add_column("held", justify="right")
+    t.add_column("95 % interval", justify="right")
+
+    def row(name, o):
+        lo, hi = o.interval
+        t.add_row(name, f"{o.held}/{o.runs} ({100 * o.fraction:.1f} %)", f"{100 * lo:.1f}-{100 * hi:.1f} %")
+
+    if st.drawn is not None:
+        row("drawn from the ranges", st.drawn)
+    w = st.worst_corner
+    for c in st.corners:
+        row(("worst corner: " if c is w else "corner: ") + c.label(), c.outcome)
+    if st.at_nominal:
+        t.add_row(f"at the profile's value in the corners (past {bench_corners.MAX_CORNER_PARAMETERS} ranges): "
+                  + ", ".join(st.at_nominal), "", "")
+    return t
+
+
 def _p(d, key: str) -> str:
     p = d.percentiles.get(key)
     if not p or p.get("p50") is None:
@@ -95,10 +121,18 @@ def _p(d, key: str) -> str:
               help="Monte Carlo over the plant too: each run draws M, m, l, b_VF, c uniformly within this "
               "fraction of the spec's values (e.g. 10%).")
 @click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters --spread draws.")
+@click.option("--bench", "bench_name", default=None, metavar="BENCH",
+              help="Bench profile (a shipped id or a TOML file) instead of the spec's.")
+@click.option("--bench-spread", is_flag=True, help="Monte Carlo over the bench too: each run draws the bench's "
+              "parameters from the profile's [uncertainty] ranges; the summary adds every corner of the ranges "
+              "and the worst.")
+@click.option("--corner-runs", type=click.IntRange(1, 100_000), default=None,
+              help="Runs at each corner of the bench's ranges with --bench-spread [default: --runs].")
 @click.option("--svg", is_flag=True, help="Also write the plot as history.svg (PNG only by default).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--force", is_flag=True, help="Replace output files that already exist.")
-def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, svg, as_json, force) -> None:
+def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, bench_name, bench_spread,
+                 corner_runs, svg, as_json, force) -> None:
     """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
     spread = None
     if spread_text is not None:
@@ -108,20 +142,32 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
         spread = {name: frac for name in parse_vary(vary)}
     check_out_dir(out_dir, SIMULATE_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one simulates
-    sp, machine, bench = load_inputs(spec)
+    sp, machine, bench = load_inputs(spec, bench_name)
+    if bench_spread and not bench.uncertainty.ranges:
+        raise InputError("--bench-spread", "", f"the bench {bench.id} states no [uncertainty] ranges")
     scenario = scenario_for(scenario_path, sp, runs, ideal)
     d = design_on(sp, machine, bench)
     net = build_patch(d, machine)
     result = run_with_progress(net, plant_params(d.spec), bench, machine, scenario, seed=seed, runs=runs,
-                               ideal=ideal, quiet=as_json, spread=spread)
+                               ideal=ideal, quiet=as_json, spread=spread, bench_spread=bench_spread)
+    corners = None
+    if bench_spread:
+        corners = bench_corners.study(net, plant_params(d.spec), bench, machine, scenario, seed=seed,
+                                      corner_runs=corner_runs or runs, drawn=result, ideal=ideal)
+    summary = result.summary()
     files = output_files(result, svg)
+    if corners is not None:
+        summary["bench_spread"] = corners.as_dict()
+        files["summary.json"] = (json.dumps(summary, indent=2, sort_keys=True, allow_nan=False) + "\n").encode()
     files["netlist.json"] = net.to_json().encode()
     written = write_files(out_dir, files, force=force)
     if as_json:
-        click.echo(json.dumps(result.summary(), indent=2, sort_keys=True, allow_nan=False))
+        click.echo(json.dumps(summary, indent=2, sort_keys=True, allow_nan=False))
         return
     console = Console()
     console.print(summary_table(result))
+    if corners is not None:
+        console.print(corner_table(corners))
     for lp in diagnose(net, plant_params(d.spec), bench):
         console.print(("[green]" if lp.stable else "[red]") + lp.line() + ("[/green]" if lp.stable else "[/red]"))
     if bench.actuator.dead_zone_V and not ideal:

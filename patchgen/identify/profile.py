@@ -12,7 +12,13 @@ import json
 from patchgen.identify.identify import Identification, Parameter
 from patchgen.inputs.spec import PlantSpec
 from patchgen.inputs.validation import validate
-from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.bench import BenchProfile, check_bench
+
+# identified value (Identification key) -> its [uncertainty] key (patchgen.profiles.uncertainty)
+RANGED = {"actuator.K_U": "K_U", "actuator.tau": "tau", "actuator.dead_zone_V": "dead_zone_V",
+          "sensors.s": "sensors.s", "sensors.theta": "sensors.theta", "sensors.s_dot": "sensors.s_dot",
+          "sensors.noise_V_rms.s": "noise_V_rms.s", "sensors.noise_V_rms.theta": "noise_V_rms.theta",
+          "sensors.noise_V_rms.s_dot": "noise_V_rms.s_dot"}
 
 SIGNIFICANT = 6
 PLANT_ORDER = ("M", "m", "l", "g", "b_VF", "c", "d")
@@ -59,8 +65,26 @@ def profile_data(result: Identification, base: BenchProfile, bench_id: str, name
     data = {"id": bench_id, "name": name, "actuator": act, "sensors": sens,
             "track": base.track.model_dump(), "disturbance": base.disturbance.model_dump()}
     data = json.loads(json.dumps(data), parse_float=lambda s: float(f"{float(s):.{SIGNIFICANT}g}"))
-    validate(BenchProfile, data, "the identified bench")
+    data["uncertainty"] = _ranges(result, data)
+    check_bench(validate(BenchProfile, data, "the identified bench"), "the identified bench")
     return data
+
+
+def _ranges(result: Identification, data: dict) -> dict:
+    """The [uncertainty] table from the 95 % intervals: a normal draw whose +/-2 sigma is the interval
+    (the range the simulator and recommend draw benches from). Ends are rounded outward to
+    SIGNIFICANT digits, a lag's low end kept above zero and a dead zone's at or above it."""
+    out: dict = {"distribution": "normal"}
+    for key, name in RANGED.items():
+        p = result.bench.get(key)
+        e = p.estimate if p is not None else None
+        if e is None or isinstance(p.value, str) or (key == "actuator.tau" and data["actuator"]["model"] == "gain"):
+            continue
+        v = float(p.value)
+        lo, hi = min(e.low, v), max(e.high, v)
+        lo = max(lo, 0.0) if name == "dead_zone_V" else (max(lo, 1e-3) if name == "tau" else max(lo, 1e-9))
+        out[name] = [float(f"{lo * (1 - 1e-6):.{SIGNIFICANT}g}"), float(f"{hi * (1 + 1e-6):.{SIGNIFICANT}g}")]
+    return out
 
 
 def bench_toml(result: Identification, base: BenchProfile, bench_id: str, name: str, sources: list[str]) -> str:
@@ -106,6 +130,11 @@ def bench_toml(result: Identification, base: BenchProfile, bench_id: str, name: 
             "", "[disturbance]   # assumed levels, as the base profile's"]
     for k, v in data["disturbance"].items():
         out.append(f"{k} = {_num(v)}")
+    out += ["", "[uncertainty]   # the 95 % intervals above as ranges: simulate --bench-spread and recommend draw "
+            "from them", f'distribution = "{data["uncertainty"]["distribution"]}"   # the range is +/-2 sigma']
+    for k, v in data["uncertainty"].items():
+        if k != "distribution":
+            out.append(f'{json.dumps(k) if "." in k else k} = [{_num(v[0])}, {_num(v[1])}]')
     return "\n".join(out) + "\n"
 
 

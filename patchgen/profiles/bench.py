@@ -6,8 +6,10 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
+from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Real, bounded, zero_or_at_least
-from patchgen.inputs.validation import load_profile
+from patchgen.inputs.validation import load_profile, validate
+from patchgen.profiles.uncertainty import RANGE_FIELDS, BenchUncertainty, range_problem
 
 
 class BenchActuator(InputModel):
@@ -65,6 +67,7 @@ class BenchProfile(InputModel):
     sensors: BenchSensors
     track: BenchTrack = BenchTrack()
     disturbance: BenchDisturbance = BenchDisturbance()
+    uncertainty: BenchUncertainty = BenchUncertainty()
     recordings: list[Annotated[str, Field(min_length=1)]] = Field(
         default_factory=list, description="the recordings an identified profile was fitted to (patchgen identify)")
 
@@ -85,4 +88,74 @@ def load_bench(name_or_path: str, source: str = "", field: str = "bench") -> Ben
     BenchProfile
         The checked profile; a bad value raises InputError naming the profile file and field.
     """
-    return load_profile(BenchProfile, name_or_path, "bench", source, field)
+    return load_profile(BenchProfile, name_or_path, "bench", source, field, check=check_bench)
+
+
+def nominal(bench: BenchProfile, key: str) -> float:
+    """The profile's own value of an uncertain parameter (a RANGE_FIELDS key; 0 for a sensor
+    noise the profile does not state)."""
+    path = RANGE_FIELDS[key]
+    section = getattr(bench, path[0])
+    if len(path) == 3:
+        return float(getattr(section, path[1]).get(path[2], 0.0))
+    return float(getattr(section, path[1]))
+
+
+def bench_at(bench: BenchProfile, values: dict[str, float]) -> BenchProfile:
+    """The bench with some of its uncertain parameters (RANGE_FIELDS keys) at the given values.
+
+    Parameters
+    ----------
+    bench : BenchProfile
+        The nominal bench.
+    values : dict of str to float
+        Parameter key -> value.
+
+    Returns
+    -------
+    BenchProfile
+        A copy with those values (not validated: see check_bench).
+    """
+    data = bench.model_dump()
+    for key, v in values.items():
+        path = RANGE_FIELDS[key]
+        target = data[path[0]]
+        if len(path) == 3:
+            target = target[path[1]]
+        target[path[-1]] = float(v)
+    return bench.model_copy(update={
+        name: getattr(bench, name).model_copy(update=data[name]) for name in ("actuator", "sensors", "disturbance")})
+
+
+def check_bench(bench: BenchProfile, source: str) -> None:
+    """The checks of the ``[uncertainty]`` table: each key a parameter of the bench, each range two
+    finite numbers low <= high, the profile's own value inside it, and both ends values the
+    profile itself would accept (positive where the field must be).
+
+    Raises
+    ------
+    InputError
+        The first bad range, naming ``uncertainty.<key>``.
+    """
+    for key, rng in bench.uncertainty.ranges.items():
+        field = f"uncertainty.{key}"
+        if key not in RANGE_FIELDS:
+            raise InputError(source, field, "not a parameter of the bench (its parameters: "
+                             + ", ".join(RANGE_FIELDS) + "; the plant's are the spec's, spread with --spread)")
+        problem = range_problem(rng)
+        if problem:
+            raise InputError(source, field, problem)
+        lo, hi = float(rng[0]), float(rng[1])
+        nom = nominal(bench, key)
+        where = ".".join(RANGE_FIELDS[key])
+        if not lo <= nom <= hi:
+            raise InputError(source, field, f"[{lo:g}, {hi:g}] does not contain the profile's own value "
+                             f"({where} = {nom:g})")
+        if key == "tau" and bench.actuator.model != "gain" and lo <= 0:
+            raise InputError(source, field, f"low end must be above 0: the actuator model {bench.actuator.model} "
+                             "needs a lag")
+        for end, v in (("low", lo), ("high", hi)):
+            try:
+                validate(BenchProfile, bench_at(bench, {key: v}).model_dump(), source)
+            except InputError as exc:
+                raise InputError(source, field, f"{end} end {v:g}: {exc.field} {exc.message}") from None

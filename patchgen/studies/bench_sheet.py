@@ -13,21 +13,26 @@ from typing import TYPE_CHECKING
 
 from patchgen.design.lqg import Design
 from patchgen.design.model import plant_params
+from patchgen.inputs.scenario import load_scenario
 from patchgen.patch.netlist import Netlist
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.uncertainty import UNITS
 from patchgen.render.patchfiles import patch_files
 from patchgen.render.sheet import SheetSection
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator loads numba, only when a prediction is made
     from patchgen.bench.simulate import RunSummary
+    from patchgen.studies.bench_corners import BenchStudy
 
 PREDICTION_TARGET = 0.95  # a scenario held in fewer of its runs than this is a predicted failure
 HOLD_RUNS = 20  # noise seeds of the sheet's 120 s hold unless asked otherwise (patchgen patch --runs)
+HOLD_SCENARIO = "hold-120s"  # the scenario run at the corners of the bench's ranges
 
 
 def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: Netlist,
-                  runs_hold: int = HOLD_RUNS, done: dict[str, list[RunSummary]] | None = None) -> SheetSection:
+                  runs_hold: int = HOLD_RUNS, done: dict[str, list[RunSummary]] | None = None,
+                  corners: BenchStudy | None = None) -> SheetSection:
     """'Predicted on the bench': the patch in the standard scenarios, with the bench's figures.
 
     Parameters
@@ -42,6 +47,9 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
         Noise seeds of the long hold.
     done : dict, optional
         Runs already simulated, by scenario name (see patchgen.bench.prediction.predict).
+    corners : BenchStudy, optional
+        The patch at the corners of the bench's ranges, when already run; when the bench states
+        ranges and none is given, the hold is run at every corner (``runs_hold`` seeds each).
 
     Returns
     -------
@@ -50,9 +58,13 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
     """
     from patchgen.bench.diagnosis import diagnose
     from patchgen.bench.prediction import diagnosis_note, predict, prediction_rows  # the simulator: numba
+    from patchgen.studies.bench_corners import study
 
     plant = plant_params(d.spec)
-    preds = predict(net, plant, bench, machine, runs_hold=runs_hold, done=done)
+    spread = bool(bench.uncertainty.ranges)
+    preds = predict(net, plant, bench, machine, runs_hold=runs_hold, done=done, bench_spread=spread)
+    if spread and corners is None:
+        corners = study(net, plant, bench, machine, load_scenario(HOLD_SCENARIO), corner_runs=runs_hold)
     header, rows = prediction_rows(preds)
     dist = bench.disturbance
     note = (f"From this netlist on the {bench_named(bench)}: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
@@ -61,7 +73,7 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
             f"N rms at the tip (to {dist.bandwidth_Hz:g} Hz); drift "
             f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s ({machine.imperfections.drift_source}); "
             f"rails +/-{machine.imperfections.saturation_V:g} V; switches at +/-{d.spec.plant.d / 2:g} m. "
-            + diagnosis_note(net, plant, bench))
+            + diagnosis_note(net, plant, bench) + (" " + ranges_note(corners) if spread else ""))
     return SheetSection("Predicted on the bench", header, rows, note,
                         banner=failure_banner(bench.id, diagnose(net, plant, bench)[-1], preds))
 
@@ -75,6 +87,19 @@ def bench_named(bench: BenchProfile) -> str:
     names = ", ".join(PurePath(r).name if len(folders) == 1 else r for r in bench.recordings)
     where = f" in {folders.pop()}" if len(folders) == 1 and folders != {"."} else ""
     return f"{bench.id} bench (identified from {len(bench.recordings)} recordings{where}: {names})"
+
+
+def ranges_note(st: BenchStudy) -> str:
+    """The ranges the prediction was made over, and the held fraction at their worst corner."""
+    from patchgen.studies.bench_corners import MAX_CORNER_PARAMETERS
+
+    ranges = ", ".join(f"{k} {lo:g} to {hi:g} {UNITS[k]}" for k, (lo, hi) in st.ranges.items())
+    w = st.worst_corner
+    rest = (f" (the corners take the {MAX_CORNER_PARAMETERS} widest ranges; at the profile's value: "
+            + ", ".join(st.at_nominal) + ")") if st.at_nominal else ""
+    return (f"Predicted over the bench's ranges ({st.distribution}: {ranges}): every run above drew its bench from "
+            f"them. At every corner of the ranges in {st.scenario}{rest}, the worst corner held "
+            f"{w.held_text()}.")
 
 
 def failure_banner(bench_id: str, loop, preds) -> str:
@@ -95,7 +120,8 @@ def failure_banner(bench_id: str, loop, preds) -> str:
 
 def predicted_patch_files(d: Design, machine: MachineProfile, bench: BenchProfile, net: Netlist,
                           sections: Sequence[SheetSection] = (), runs_hold: int = HOLD_RUNS,
-                          done: dict[str, list[RunSummary]] | None = None) -> dict[str, str]:
+                          done: dict[str, list[RunSummary]] | None = None,
+                          corners: BenchStudy | None = None) -> dict[str, str]:
     """Every file of a patch (patchgen.render.patchfiles.PATCH_FILES), the bench prediction first
     on the sheet, then ``sections``; arguments as :func:`bench_section`."""
-    return patch_files(d, machine, net, [bench_section(d, machine, bench, net, runs_hold, done), *sections])
+    return patch_files(d, machine, net, [bench_section(d, machine, bench, net, runs_hold, done, corners), *sections])

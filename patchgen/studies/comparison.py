@@ -14,7 +14,8 @@ from patchgen.profiles.machine import MachineProfile
 from patchgen.render.sheet import SheetSection
 from patchgen.studies.bench_sheet import predicted_patch_files
 from patchgen.studies.ranking import ROUND_RUNS, TARGET
-from patchgen.studies.recommend import Candidate, Recommendation, chosen_spec
+from patchgen.studies.recommend import CORNER_RUNS, Candidate, Recommendation, chosen_spec
+from patchgen.studies.robust import ALTERNATIVES, WHY_GAINS
 
 RECOMMENDED_SPEC = "recommended.toml"
 
@@ -25,6 +26,7 @@ def table_rows(rec: Recommendation) -> list[dict]:
     for i, c in enumerate(rec.ranked, 1):
         m = c.margins
         w = c.weakest
+        st = c.bench_study
         rows.append({
             "rank": i if c.simulated else None,
             "realisation": c.label,
@@ -45,6 +47,9 @@ def table_rows(rec: Recommendation) -> list[dict]:
             "amplifiers": c.amplifiers,
             "pots": c.pots,
             "error": c.error,
+            "worst_corner": None if st is None or st.worst_corner is None else st.worst_corner.as_dict(),
+            "weakest_parameter": None if st is None or st.weakest_parameter is None else st.weakest_parameter.as_dict(),
+            "robust": c.robust_note or None,
         })
     return rows
 
@@ -68,6 +73,34 @@ def held_cell(row: dict) -> str:
     return f"{row['fraction_ok']:.1%} [{lo:.1%}, {hi:.1%}] {row['weakest_scenario']}"
 
 
+def corner_cell(row: dict) -> str:
+    """The held fraction at the worst corner of the bench's ranges, and the weakest parameter's end
+    ("-" when the bench states no ranges or the candidate was not run at its corners)."""
+    w, p = row.get("worst_corner"), row.get("weakest_parameter")
+    if w is None:
+        return "-"
+    corner = ", ".join(f"{k} {v:g}" for k, v in w["values"].items())
+    weak = "" if p is None else "; weakest: " + ", ".join(f"{k} {v:g}" for k, v in p["values"].items())
+    return f"{w['held']}/{w['runs']} at {corner}{weak}"
+
+
+def robust_text(rec: Recommendation) -> str:
+    """Which answer to the dead zone and lag the chosen patch uses, and why not the others ("" when
+    the bench states no ranges)."""
+    if not rec.ranges:
+        return ""
+    b = rec.best
+    if b is not None and b.robust_note:
+        used = (f"Against the dead zone and lag, the chosen patch's gains were chosen over the corners of the bench's "
+                f"ranges ({WHY_GAINS}): {b.robust_note}.")
+    elif b is not None:
+        used = ("The chosen patch keeps the spec's gains: they held at every corner of the bench's ranges "
+                "at least as well as the gains chosen over the corners.")
+    else:
+        used = "No candidate held at every corner of the bench's ranges."
+    return used + " Not used: " + "; ".join(ALTERNATIVES) + "."
+
+
 def _verdict_words(row: dict) -> str:
     return {"holds": "holds", "fails": "fails", "undecided": "undecided"}[row["decision"]]
 
@@ -84,7 +117,20 @@ def method_text(rec: Recommendation) -> str:
             f"that is not stable on the bench (linearised with its actuator lag and pots as dialled) ranks below every "
             f"stable one and is never chosen; then by holds / undecided / fails, the weakest held fraction (when not "
             f"clearly holding), the wired loop's gain margin on the bench (nearer limit), its phase margin, then "
-            f"hardware (units, amplifiers, pots).")
+            f"hardware (units, amplifiers, pots)." + _ranges_text(rec))
+
+
+def _ranges_text(rec: Recommendation) -> str:
+    """How the bench's ranges entered the ranking ("" when it states none)."""
+    if not rec.ranges:
+        return ""
+    ranges = ", ".join(f"{k} {lo:g} to {hi:g}" for k, (lo, hi) in rec.ranges.items())
+    return (f" The bench states ranges ({rec.distribution}: {ranges}): every run drew its bench from them, so "
+            f"the held fractions are over that uncertainty. Each stable realisation was also run at every corner "
+            f"of the ranges and at each end of each range (the others at the profile's values), {CORNER_RUNS} "
+            f"seeds each, in its weakest scenario: the worst corner's held fraction ranks right after the verdict, "
+            f"a realisation is chosen only if it held in at least {TARGET:.0%} of the runs at every corner, and "
+            f"the end held least (ties: the one taking the cart furthest) names its weakest parameter.")
 
 
 def verdict_text(rec: Recommendation) -> str:
@@ -108,17 +154,20 @@ def verdict_text(rec: Recommendation) -> str:
 
 def table_markdown(rec: Recommendation, reference_V: float) -> str:
     """The comparison as a Markdown section body: why the first row was chosen."""
+    corner_col = " worst corner of the bench's ranges |" if rec.ranges else ""
     head = ("| rank | realisation | estimator | wired loop on the bench | verdict | held (weakest scenario, 95 % "
-            "interval) | GM lower / upper (dB) | PM (deg) | worst swing (V) | units / amps / pots |\n"
-            "|---|---|---|---|---|---|---|---|---|---|\n")
+            f"interval) |{corner_col} GM lower / upper (dB) | PM (deg) | worst swing (V) | units / amps / pots |\n"
+            "|---|---|---|---|---|---|---|---|---|---|" + "---|" * bool(rec.ranges) + "\n")
     lines = []
     for r in table_rows(rec):
         if r["error"]:
-            lines.append(f"| - | {r['realisation']} | {r['estimator']} | | not simulated: {r['error']} | | | | | |")
+            lines.append(f"| - | {r['realisation']} | {r['estimator']} | | not simulated: {r['error']} | | | | | |"
+                         + " |" * bool(rec.ranges))
             continue
+        corner = f" {corner_cell(r)} |" if rec.ranges else ""
         lines.append(
             f"| {r['rank']} | {r['realisation']} | {r['estimator']} | {r['bench_loop']} | {_verdict_words(r)} | "
-            f"{held_cell(r)} | {gm_cell(r)} | {fmt_figure(r['pm_deg'], '{:.1f}')} | "
+            f"{held_cell(r)} |{corner} {gm_cell(r)} | {fmt_figure(r['pm_deg'], '{:.1f}')} | "
             f"{r['worst_swing_V']:.2f} of {reference_V:g} | {r['units']} / {r['amplifiers']} / {r['pots']} |")
     names = [sc.name for sc in rec.scenarios]
     per = ("\n\nHeld per scenario (runs held of runs simulated):\n\n| realisation | " + " | ".join(names) + " |\n|---|"
@@ -127,8 +176,9 @@ def table_markdown(rec: Recommendation, reference_V: float) -> str:
         if c.simulated:
             per += f"| {c.label} | " + " | ".join(f"{o.held} / {o.runs}" for o in c.outcomes) + " |\n"
     loops = "\n".join(f"- {c.label}: {c.bench_loop_line}" for c in rec.ranked if c.bench_loop_line)
+    robust_words = robust_text(rec)
     return (method_text(rec) + "\n\n" + head + "\n".join(lines) + per + "\nLinearised on the bench:\n\n" + loops
-            + f"\n\n**{verdict_text(rec)}**\n")
+            + (f"\n\n{robust_words}" if robust_words else "") + f"\n\n**{verdict_text(rec)}**\n")
 
 
 def why_section(rec: Recommendation, reference_V: float) -> SheetSection:
@@ -148,17 +198,23 @@ def why_section(rec: Recommendation, reference_V: float) -> SheetSection:
     """
     header = ["rank", "realisation", "loop on bench", "verdict", "held (weakest, 95 %)", "GM lower/upper (dB)",
               "PM (deg)", "worst swing (V)", "amps/pots"]
+    if rec.ranges:
+        header.insert(5, "worst corner of the ranges")
     rows = []
     misfits = []
     for r in table_rows(rec):
         if r["error"]:
-            rows.append(["-", r["realisation"], "", "does not fit", "", "", "", "", ""])
+            rows.append(["-", r["realisation"], "", "does not fit", "", "", "", "", ""] + [""] * bool(rec.ranges))
             misfits.append(f"{r['realisation']}: {r['error']}")
             continue
-        rows.append([str(r["rank"]), f"{r['realisation']} ({r['estimator']})", r["bench_loop"], _verdict_words(r),
-                     held_cell(r), gm_cell(r), fmt_figure(r["pm_deg"], "{:.1f}"),
-                     f"{r['worst_swing_V']:.2f} of {reference_V:g}", f"{r['amplifiers']}/{r['pots']}"])
-    note = (method_text(rec) + " " + verdict_text(rec)
+        row = [str(r["rank"]), f"{r['realisation']} ({r['estimator']})", r["bench_loop"], _verdict_words(r),
+               held_cell(r), gm_cell(r), fmt_figure(r["pm_deg"], "{:.1f}"),
+               f"{r['worst_swing_V']:.2f} of {reference_V:g}", f"{r['amplifiers']}/{r['pots']}"]
+        if rec.ranges:
+            row.insert(5, corner_cell(r))
+        rows.append(row)
+    robust_words = robust_text(rec)
+    note = (method_text(rec) + " " + verdict_text(rec) + (" " + robust_words if robust_words else "")
             + (" Not fitting: " + "; ".join(misfits) + "." if misfits else ""))
     return SheetSection("Why this patch", header, rows, note)
 
@@ -195,7 +251,8 @@ def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: Be
     files: dict[str, str] = {}
     if best is not None:
         files.update(predicted_patch_files(best.design, machine, bench, best.netlist,
-                                           [why_section(rec, machine.reference_V)], done=_reusable_runs(rec, best)))
+                                           [why_section(rec, machine.reference_V)], done=_reusable_runs(rec, best),
+                                           corners=best.bench_study))
         files[RECOMMENDED_SPEC] = spec_toml(chosen_spec(rec), (
             f"{rec.spec.name}, as patchgen recommend chose it on the {bench.id} bench: {best.label}.\n"
             "Every patchgen command takes this file; see recommendation.md for why."))
@@ -204,5 +261,7 @@ def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: Be
         "spec": rec.spec.name, "bench": bench.id, "machine": machine.id,
         "scenarios": [{"name": sc.name, "seed": rec.seed_of(sc)} for sc in rec.scenarios],
         "max_runs": rec.max_runs, "target": TARGET, "chosen": None if best is None else best.label,
+        "bench_ranges": {k: list(v) for k, v in rec.ranges.items()}, "bench_distribution": rec.distribution,
+        "corner_runs": CORNER_RUNS if rec.ranges else None, "robust": robust_text(rec) or None,
         "verdict": verdict_text(rec), "candidates": table_rows(rec)}, indent=2, sort_keys=True, allow_nan=False) + "\n"
     return files

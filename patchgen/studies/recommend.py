@@ -19,6 +19,14 @@ below every stable one and is never chosen); holds, undecided, fails; for those 
 clearly hold, the weakest scenario's held fraction; then the wired loop's gain margin on the
 bench (the nearer limit, dB) and phase margin; then hardware (units, amplifiers, pots); then the
 candidate order. Figures are rounded before ranking so the order is deterministic.
+
+When the bench states ranges for its parameters (its ``[uncertainty]`` table), every run draws its
+bench from them, so the held fractions are over the bench's uncertainty; each stable candidate is
+also run at every corner of the ranges and at each end of each range in its weakest scenario
+(ties: the longest; CORNER_RUNS seeds each, patchgen.studies.bench_corners), which names its
+weakest parameter; the worst corner's held fraction ranks right after the verdict, and a candidate is chosen only if it
+held in at least TARGET of the runs at every corner. The candidates then include one whose gains
+are chosen over the corners (patchgen.studies.robust, added by ``extra_candidates``).
 """
 
 from __future__ import annotations
@@ -39,6 +47,8 @@ from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.studies import robust
+from patchgen.studies.bench_corners import BenchStudy, study
 from patchgen.studies.ranking import DECISIONS, ROUND_RUNS, TARGET, ScenarioOutcome, decision, outcome, weakest
 
 CANDIDATES = (
@@ -49,6 +59,7 @@ CANDIDATES = (
 )
 
 RUNS = 200  # the most noise seeds per candidate and scenario
+CORNER_RUNS = 64  # seeds at each corner and each end of the bench's ranges
 
 # Figures are rounded before ranking, so that noise in the last digits cannot reorder candidates.
 FRACTION_DIGITS = 6  # fraction of runs held: below one run in a million
@@ -71,6 +82,8 @@ class Candidate:
     bench_loop_line: str = ""
     margins: Margins | None = field(default=None, compare=False)  # the wired loop's, on the bench
     outcomes: tuple[ScenarioOutcome, ...] = ()
+    bench_study: BenchStudy | None = field(default=None, compare=False)  # corners and ends of the bench's ranges
+    robust_note: str = ""  # how a corner-robust candidate was chosen
 
     @property
     def simulated(self) -> bool:
@@ -144,9 +157,18 @@ class Candidate:
 
         dec = self.decision
         frac = 0.0 if dec == "holds" else -round(self.fraction_ok, FRACTION_DIGITS)
+        corner = self.corner_fraction
+        corner = 0.0 if corner is None else -round(corner, FRACTION_DIGITS)
         units = self.netlist.units if self.netlist is not None else 1
-        return (0, 0 if self.bench_loop == "stable" else 1, DECISIONS.index(dec), frac, r(self.gm_db),
+        return (0, 0 if self.bench_loop == "stable" else 1, DECISIONS.index(dec), corner, frac, r(self.gm_db),
                 r(self.pm_deg), units, self.amplifiers or 0, self.pots or 0, order)
+
+    @property
+    def corner_fraction(self) -> float | None:
+        """The held fraction at the worst corner of the bench's ranges (None: not run there)."""
+        st = self.bench_study
+        w = None if st is None else st.worst_corner
+        return None if w is None else w.outcome.fraction
 
 
 @dataclass(frozen=True)
@@ -158,6 +180,8 @@ class Recommendation:
     max_runs: int
     seed: int | None  # every scenario's base seed; None: each scenario's own
     ranked: tuple[Candidate, ...]
+    ranges: dict[str, tuple[float, float]] = field(default_factory=dict)  # the bench's, drawn by every run
+    distribution: str = "uniform"
 
     @property
     def best(self) -> Candidate | None:
@@ -166,7 +190,8 @@ class Recommendation:
         the pendulum is never chosen, whatever its runs did)."""
         b = self.ranked[0] if self.ranked else None
         ok = (b is not None and b.netlist is not None and b.simulated and b.bench_loop == "stable"
-              and b.decision != "fails" and b.fraction_ok >= TARGET)
+              and b.decision != "fails" and b.fraction_ok >= TARGET
+              and (b.bench_study is None or b.corner_fraction >= TARGET))
         return b if ok else None
 
     def seed_of(self, scenario: Scenario) -> int:
@@ -213,30 +238,42 @@ def prepare(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile) -> l
     list of Candidate
         In candidate_specs order; one that does not design or fit keeps its one-line error.
     """
-    out = []
-    for label, kind, sp in candidate_specs(spec, bench):
-        try:
-            d = design_on(sp, machine, bench)
-        except InputError as exc:
-            out.append(Candidate(label, kind, sp, None, None, exc.message))
-            continue
-        try:
-            net = build_patch(d, machine, 1)
-        except InputError as exc:
-            if machine.max_units == 1:
-                out.append(Candidate(label, kind, sp, d, None, exc.message))
-                continue
-            try:  # slaved units, as the machine allows
-                net = build_patch(d, machine, "auto")
-                label = f"{label} ({net.units} slaved units)"
-            except InputError as exc2:
-                out.append(Candidate(label, kind, sp, d, None, exc2.message))
-                continue
-        plant = plant_params(d.spec)
-        loop = diagnose(net, plant, bench)[-1]
-        out.append(Candidate(label, kind, sp, d, net, None, _detail(d), loop.verdict, loop.line(),
-                             bench_margins(net, plant, bench)))
-    return out
+    return [allocate(label, kind, sp, machine, bench) for label, kind, sp in candidate_specs(spec, bench)]
+
+
+def allocate(label: str, kind: str, sp: DesignSpec, machine: MachineProfile, bench: BenchProfile) -> Candidate:
+    """One candidate designed and allocated (on slaved units if the machine allows and one is not
+    enough), with its wired loop's verdict and margins on the bench; an error is kept."""
+    try:
+        d = design_on(sp, machine, bench)
+    except InputError as exc:
+        return Candidate(label, kind, sp, None, None, exc.message)
+    try:
+        net = build_patch(d, machine, 1)
+    except InputError as exc:
+        if machine.max_units == 1:
+            return Candidate(label, kind, sp, d, None, exc.message)
+        try:  # slaved units, as the machine allows
+            net = build_patch(d, machine, "auto")
+            label = f"{label} ({net.units} slaved units)"
+        except InputError as exc2:
+            return Candidate(label, kind, sp, d, None, exc2.message)
+    plant = plant_params(d.spec)
+    loop = diagnose(net, plant, bench)[-1]
+    return Candidate(label, kind, sp, d, net, None, _detail(d), loop.verdict, loop.line(),
+                     bench_margins(net, plant, bench))
+
+
+def extra_candidates(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenarios: Sequence[Scenario],
+                     seed: int | None = None) -> list[Candidate]:
+    """When the bench states ranges: the candidate whose gains (and integral action) are chosen
+    over the corners of the ranges (patchgen.studies.robust.search); none otherwise."""
+    choice = robust.search(spec, machine, bench, scenarios, seed)
+    if choice is None:
+        return []
+    c = allocate(f"{robust.LABEL}, {spec.estimator.kind.replace('_', ' ')}", spec.estimator.kind, choice.spec,
+                 machine, bench)
+    return [replace(c, robust_note=choice.detail())]
 
 
 def _detail(d: Design) -> str:
@@ -269,7 +306,9 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
 
     Rounds of ROUND_RUNS runs per scenario (run i of a scenario always draws from its seed and i,
     so a round continues the runs before it) until the candidate clearly holds or clearly fails
-    (patchgen.studies.ranking.decision), or every scenario has ``max_runs`` runs.
+    (patchgen.studies.ranking.decision), or every scenario has ``max_runs`` runs. When the bench
+    states ranges, every run draws its bench from them, and a stable candidate is then run at the
+    corners and ends of the ranges in its weakest scenario (``bench_study``).
 
     Parameters
     ----------
@@ -305,7 +344,7 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
             if n <= 0:
                 continue
             res = simulate(c.netlist, plant, bench, machine, sc, seed=seed, runs=n, first_run=have,
-                           keep_history=have == 0)
+                           keep_history=have == 0, bench_spread=bool(bench.uncertainty.ranges))
             runs_of[sc.name].extend(res.runs)
             swing[sc.name] = max(swing[sc.name], _swing(res, machine))
             done += n
@@ -314,7 +353,13 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
         outcomes = tuple(outcome(sc.name, runs_of[sc.name], swing[sc.name]) for sc in scenarios)
         full = all(len(v) >= max_runs for v in runs_of.values())
         if full or (early_stop and decision(outcomes) != "undecided"):
-            return replace(c, outcomes=outcomes)
+            break
+    st = None
+    if bench.uncertainty.ranges and c.bench_loop == "stable":
+        held = {o.scenario: (o.fraction, o.interval[1]) for o in outcomes}  # ties: the longest scenario
+        weak = min(scenarios, key=lambda sc: (*held[sc.name], -sc.duration_s))
+        st = study(c.netlist, plant, bench, machine, weak, seed=seed, corner_runs=CORNER_RUNS, ends=True)
+    return replace(c, outcomes=outcomes, bench_study=st)
 
 
 def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenarios: Sequence[Scenario],
@@ -345,7 +390,7 @@ def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, sc
     Recommendation
         The candidates ranked best first (see the module docstring).
     """
-    cands = prepare(spec, machine, bench)
+    cands = prepare(spec, machine, bench) + extra_candidates(spec, machine, bench, scenarios, seed)
     per = runs * len(scenarios)
     total = per * sum(c.netlist is not None for c in cands)
     done, base = [], 0
@@ -360,7 +405,8 @@ def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, sc
             progress(c.label, base, total)
     order = {id(c): i for i, c in enumerate(done)}
     ranked = tuple(sorted(done, key=lambda c: c.rank_key(order[id(c)])))
-    return Recommendation(spec, tuple(scenarios), runs, seed, ranked)
+    return Recommendation(spec, tuple(scenarios), runs, seed, ranked, dict(bench.uncertainty.ranges),
+                          bench.uncertainty.distribution)
 
 
 def chosen_spec(rec: Recommendation) -> DesignSpec:

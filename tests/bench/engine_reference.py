@@ -1,6 +1,6 @@
 """The engine as it was before runs went side by side: one run per call, a scalar loop, fast-math.
-Kept verbatim (apart from taking its normals as float64, the bench's random forces on the plant and
-this header) as the reference the
+Kept verbatim (apart from taking its normals as float64, the bench's random forces on the plant,
+each run's own actuator, sensor constants and noise levels, and this header) as the reference the
 blocked kernel (patchgen.bench.kernel) is checked against, run for run, on the same noise streams."""
 
 import math
@@ -20,12 +20,12 @@ _FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
 def reference_runs(cfg: EngineConfig, draws: Draws, n_history: int = 1):
     """Every run of ``draws`` (patchgen.bench.engine.draw_batch) through the old loop, with the
     normals the kernel draws for its key. Returns arrays like patchgen.bench.engine.BatchOutput's."""
-    keys, signs, plants = draws
+    keys, signs, plants = draws.keys, draws.signs, draws.plants
     st, sensors, noise, w, dist = cfg.records
     runs, n_amp = signs.shape
     ns = len(sensors.state)
     nch = ns + n_amp + 2  # the voltages, then the random forces on the cart and at the tip
-    noisy = bool(noise.std.any())
+    noisy = bool(draws.noise_std.any())
     n_samples = st.steps // st.stride + 2
     out = {"trip_time": np.full(runs, np.nan), "fall_time": np.full(runs, np.nan),
            "max_abs_theta": np.zeros(runs), "max_abs_s": np.zeros(runs), "rms_theta": np.zeros(runs),
@@ -34,15 +34,16 @@ def reference_runs(cfg: EngineConfig, draws: Draws, n_history: int = 1):
            "final_state": np.zeros((runs, 4)),
            "history": np.zeros((n_history, n_samples, H_AMPS + n_amp)),
            "history_length": np.zeros(n_history, dtype=np.int64)}
+    std = draws.noise_std
     for r in range(runs):
         gauss = (run_normals(keys[r, 0], keys[r, 1], st.steps, nch) if noisy
                  else np.zeros((0, 0)))
         _one_run(r, signs[r], gauss, st.dt, st.steps, st.stride, st.x0, plants[r],
-                 st.limit_switches, sensors.state, sensors.gain, noise.a[:ns], noise.std[:ns],
+                 st.limit_switches, sensors.state, draws.sensor_gains[r], noise.a[:ns], std[r, :ns],
                  w.kind, w.in_ptr, w.in_src, w.in_gain, w.param1, w.param2, w.ic, w.drift,
-                 noise.a[ns:ns + n_amp], noise.std[ns:ns + n_amp], noise.a[ns + n_amp:],
-                 noise.std[ns + n_amp:], st.saturation, st.clip, st.output, st.actuator,
-                 st.K_U, st.tau, st.dead_zone, st.force_limit, dist.kind, dist.t0, dist.t1,
+                 noise.a[ns:ns + n_amp], std[r, ns:ns + n_amp], noise.a[ns + n_amp:],
+                 std[r, ns + n_amp:], st.saturation, st.clip, st.output, st.actuator,
+                 *draws.actuators[r], dist.kind, dist.t0, dist.t1,
                  dist.value, st.fall_angle, out["trip_time"], out["fall_time"], out["max_abs_theta"],
                  out["max_abs_s"], out["rms_theta"], out["max_abs_u_c"], out["max_abs_force"],
                  out["overload_first"], out["overload_time"], out["final_state"], out["history"],

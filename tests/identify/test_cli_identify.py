@@ -54,6 +54,14 @@ def test_identify_writes_a_profile_and_a_plant_table_that_read_back(fitted):
     bench = load_bench(str(fit / "bench.toml"))
     assert bench.actuator.K_U == pytest.approx(11.0, rel=0.02) and bench.actuator.tau == pytest.approx(0.3, rel=0.05)
     assert len(bench.recordings) == 10 and all(r.startswith(str(tmp / "rec")) for r in bench.recordings)
+    # the intervals as the bench's ranges, for simulate --bench-spread and recommend
+    ranges = bench.uncertainty.ranges
+    assert bench.uncertainty.distribution == "normal"
+    assert set(ranges) == {"K_U", "tau", "dead_zone_V", "sensors.s", "sensors.theta", "sensors.s_dot",
+                           "noise_V_rms.s", "noise_V_rms.theta", "noise_V_rms.s_dot"}
+    e = report["bench"]["actuator.tau"]["interval_95"]
+    assert ranges["tau"] == pytest.approx(tuple(e), rel=1e-5)
+    assert ranges["tau"][0] < bench.actuator.tau < ranges["tau"][1]
     plant = tomllib.loads((fit / "plant.toml").read_text())["plant"]
     assert plant["l"] == pytest.approx(TRUE_PLANT.l, rel=0.01) and plant["b_VF"] == pytest.approx(3.5, rel=0.1)
     low, high = report["bench"]["actuator.K_U"]["interval_95"]

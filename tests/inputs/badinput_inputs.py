@@ -191,7 +191,30 @@ def profile_cases() -> list[Case]:
             bench_case("noise-nan", with_field(UW, "sensors.noise_V_rms.s", math.nan), "sensors.noise_V_rms.s"),
             bench_case("unknown-track", with_field(UW, "track.length", 1.0), "track.length"),
             bench_case("missing-actuator", {k: v for k, v in UW.items() if k != "actuator"}, "actuator")]
+    out += [bench_case(f"range-{name}", {**UW, "uncertainty": table}, f"uncertainty.{key}")
+            for name, key, table in RANGE_CASES]
+    out += [bench_case("range-distribution", {**UW, "uncertainty": {"distribution": "triangular"}},
+                       "uncertainty.distribution")]
     return out
+
+
+# [uncertainty] ranges that are wrong: (case, key named, table); uw-1991's tau is 0.2 s, dead zone 0.2 V
+RANGE_CASES = [
+    ("reversed", "tau", {"tau": [0.3, 0.15]}),
+    ("inf", "K_U", {"K_U": [11.0, math.inf]}),
+    ("nan", "dead_zone_V", {"dead_zone_V": [math.nan, 0.4]}),
+    ("unknown", "M", {"M": [3.0, 4.0]}),
+    ("unknown-sensor", "sensors.theta_dot", {"sensors.theta_dot": [4.0, 4.4]}),
+    ("one-number", "tau", {"tau": 0.2}),
+    ("three-numbers", "tau", {"tau": [0.1, 0.2, 0.3]}),
+    ("strings", "tau", {"tau": ["0.1", "0.3"]}),
+    ("nominal-outside", "dead_zone_V", {"dead_zone_V": [0.3, 0.4]}),
+    ("negative", "dead_zone_V", {"dead_zone_V": [-0.1, 0.4]}),
+    ("lag-zero", "tau", {"tau": [0.0, 0.3]}),
+    ("noise-negative", "noise_V_rms.theta", {"noise_V_rms.theta": [-0.001, 0.004]}),
+    ("K_U-below-floor", "K_U", {"K_U": [0.001, 17.0]}),
+    ("bool", "K_U", {"K_U": [True, 17.0]}),
+]
 
 
 def spec_for_profile(field: str, target: str) -> dict:

@@ -1,0 +1,178 @@
+"""A patch over the bench's uncertainty: the held fraction over runs whose bench is drawn from the
+profile's ranges, every corner of the box of ranges, the worst corner, and the parameter whose end
+hurts most.
+
+A run *holds* as recommend counts it (patchgen.studies.ranking.outcome): up, inside the switches
+and no amplifier past the rails for the whole scenario. Every corner and every end runs the same
+seeds (run i of the Monte Carlo's seed), so corners differ by the bench alone.
+
+A box of k ranges has 2^k corners; past MAX_CORNER_PARAMETERS ranges only the widest (relative to
+their nominal value) are taken to their corners and the rest stay at the profile's values, and the
+study says which.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from patchgen.bench.bench_spread import active_ranges
+from patchgen.bench.simulate import SimResult, simulate
+from patchgen.inputs.scenario import Scenario
+from patchgen.patch.netlist import Netlist
+from patchgen.plant.equations import PlantParams
+from patchgen.profiles.bench import BenchProfile, bench_at, nominal
+from patchgen.profiles.machine import MachineProfile
+from patchgen.studies.ranking import ScenarioOutcome, outcome
+
+MAX_CORNER_PARAMETERS = 6  # 64 corners
+
+
+@dataclass(frozen=True)
+class CornerOutcome:
+    """The runs at one corner (or one end of one range): the values set, and how many held."""
+
+    values: dict[str, float]
+    outcome: ScenarioOutcome
+
+    def as_dict(self) -> dict:
+        """Plain JSON-ready values."""
+        d = self.outcome.as_dict()
+        d.pop("scenario")
+        return {"values": dict(self.values), **d}
+
+    def label(self) -> str:
+        """``tau 0.3, dead_zone_V 0.4``."""
+        return ", ".join(f"{k} {v:g}" for k, v in self.values.items())
+
+    def held_text(self) -> str:
+        """``64/64 (100.0 %)`` at ``label()``."""
+        o = self.outcome
+        return f"{o.held}/{o.runs} ({100 * o.fraction:.1f} %) at {self.label()}"
+
+
+@dataclass(frozen=True)
+class BenchStudy:
+    """A patch over the bench's ranges in one scenario: the drawn Monte Carlo, each corner, and
+    (when asked for) each end of each range with the others at the profile's values."""
+
+    scenario: str
+    ranges: dict[str, tuple[float, float]]
+    distribution: str
+    drawn: ScenarioOutcome | None
+    corners: tuple[CornerOutcome, ...]
+    at_nominal: tuple[str, ...]  # ranges left at the profile's value in the corners (past the cap)
+    ends: tuple[CornerOutcome, ...] = ()
+
+    @property
+    def worst_corner(self) -> CornerOutcome | None:
+        """The corner held least (ties: the lower interval top, then the one that takes the cart
+        furthest, by the 95th percentile of max |s|, then the first)."""
+        return min(self.corners, key=lambda c: (c.outcome.fraction, c.outcome.interval[1], -cart_excursion(c)),
+                   default=None)
+
+    @property
+    def weakest_parameter(self) -> CornerOutcome | None:
+        """The end of a range, the others at the profile's values, held least (ties: the one that
+        takes the cart furthest, by the 95th percentile of max |s|; then the first); None: no ends run."""
+        return min(self.ends, key=lambda c: (c.outcome.fraction, c.outcome.interval[1], -cart_excursion(c)),
+                   default=None)
+
+    def as_dict(self) -> dict:
+        """Plain JSON-ready values."""
+        w, p = self.worst_corner, self.weakest_parameter
+        return {"scenario": self.scenario, "ranges": {k: list(v) for k, v in self.ranges.items()},
+                "distribution": self.distribution, "drawn": None if self.drawn is None else self.drawn.as_dict(),
+                "corners": [c.as_dict() for c in self.corners], "corners_at_nominal": list(self.at_nominal),
+                "worst_corner": None if w is None else w.as_dict(),
+                "ends": [c.as_dict() for c in self.ends],
+                "weakest_parameter": None if p is None else p.as_dict()}
+
+
+def cart_excursion(c: CornerOutcome) -> float:
+    """The 95th percentile over the runs of max |s| (m): how near the switches the cart came."""
+    return float(np.percentile([r.max_abs_s_m for r in c.outcome.results], 95)) if c.outcome.results else 0.0
+
+
+def corner_values(bench: BenchProfile, ranges: dict[str, tuple[float, float]],
+                  cap: int = MAX_CORNER_PARAMETERS) -> tuple[list[dict[str, float]], tuple[str, ...]]:
+    """Every corner of the box (low ends first, the first range slowest), and the ranges past
+    ``cap`` left at the profile's value (the narrowest relative to their nominal value)."""
+    def width(k):
+        lo, hi = ranges[k]
+        return (hi - lo) / max(abs(nominal(bench, k)), 1e-300)
+
+    keep = sorted(ranges, key=lambda k: -width(k))[:cap]
+    keys = [k for k in ranges if k in keep]
+    rest = tuple(k for k in ranges if k not in keep)
+    return [dict(zip(keys, ends)) for ends in itertools.product(*(ranges[k] for k in keys))], rest
+
+
+def _worst_swing(res: SimResult, saturation_V: float) -> float:
+    """The largest |u_c| of the runs (the rails when any overloaded)."""
+    swing = max([0.0] + [r.max_abs_u_c_V for r in res.runs])
+    return saturation_V if any(r.overloads for r in res.runs) else swing
+
+
+def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, scenario: Scenario,
+          *, seed: int | None = None, corner_runs: int, drawn: SimResult | None = None, ends: bool = False,
+          ideal: bool = False, stop_below: int | None = None,
+          progress: Callable[[int, int], None] | None = None) -> BenchStudy:
+    """The patch at every corner of the bench's ranges (and each end of each range, if asked).
+
+    Parameters
+    ----------
+    net : Netlist
+        The patch.
+    plant : PlantParams
+        The nominal plant.
+    bench, machine : BenchProfile, MachineProfile
+        The bench with its ``[uncertainty]`` ranges, and the machine.
+    scenario : Scenario
+        The scenario.
+    seed : int, optional
+        The Monte Carlo's seed (default: the scenario's).
+    corner_runs : int
+        Runs at each corner and each end.
+    drawn : SimResult, optional
+        The Monte Carlo over drawn benches (``simulate(..., bench_spread=True)``), counted here.
+    ends : bool
+        Also run each end of each range, the others at the profile's values (the weakest parameter).
+    ideal : bool
+        Every imperfection off (only the ranges an ideal run feels).
+    stop_below : int, optional
+        Stop at the first corner held in fewer runs than this (the study then has fewer corners
+        than the box: a search's candidate already beaten).
+    progress : callable, optional
+        ``progress(done, total)`` after each corner or end.
+
+    Returns
+    -------
+    BenchStudy
+    """
+    ranges = active_ranges(bench, ideal, scenario.noise.mode == "profile")
+    corners, rest = corner_values(bench, ranges)
+    singles = [{k: v} for k, r in ranges.items() for v in r] if ends else []
+    sat = machine.imperfections.saturation_V
+    total, done = len(corners) + len(singles), 0
+
+    def run(values):
+        nonlocal done
+        res = simulate(net, plant, bench_at(bench, values), machine, scenario, seed=seed, runs=corner_runs,
+                       keep_history=False, ideal=ideal)
+        done += 1
+        if progress is not None:
+            progress(done, total)
+        return CornerOutcome(values, outcome(scenario.name, res.runs, _worst_swing(res, sat)))
+
+    counted = None if drawn is None else outcome(scenario.name, drawn.runs, _worst_swing(drawn, sat))
+    done_corners = []
+    for v in corners:
+        done_corners.append(run(v))
+        if stop_below is not None and done_corners[-1].outcome.held < stop_below:
+            break
+    return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
+                      tuple(done_corners), rest, tuple(run(v) for v in singles))

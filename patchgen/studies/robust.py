@@ -1,0 +1,165 @@
+"""Candidates robust to the bench's uncertainty (the actuator's dead zone and lag above all): when a
+bench profile states ranges, the gains are chosen over the corners of those ranges, not on one
+nominal model.
+
+The design is the spec's LQR with the bench's actuator model, its Bryson excursions scaled by each
+point of a small grid (WEIGHT_GRID; tighter excursions on the states raise the loop gain, which
+shrinks the limit cycle a dead zone drives; the force's excursion stays the spec's), with and
+without the integral of the cart position. Every point that designs and fits the machine is run
+at every corner of the ranges in every scenario, SEARCH_RUNS seeds per corner; the point held best
+at its worst corner wins (ties: the smaller cart excursion over the corners, i.e. the most room
+before the limit switches; then the grid order). A point is dropped as soon as one corner does
+worse than the best point's worst.
+
+Other ways to beat a dead zone, and why a patch here does not use them (``ALTERNATIVES``): dither
+needs a periodic source the machine profiles do not list, and a dead-zone inverse needs diodes or a
+comparator they do not have either. The sheet says so.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from patchgen.design.lqg import design_on
+from patchgen.design.model import plant_params
+from patchgen.inputs.errors import InputError
+from patchgen.inputs.scenario import Scenario
+from patchgen.inputs.spec import DesignSpec
+from patchgen.patch.build import build_patch
+from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
+from patchgen.studies.bench_corners import BenchStudy, cart_excursion, corner_values, study
+
+# Bryson excursions times these (theta, s, s_dot, u); integral of s off, then on
+WEIGHT_GRID = {"theta": (1.0, 0.5), "s": (1.0, 0.5), "s_dot": (1.0, 1 / 3), "u": (1.0,)}
+INTEGRAL_OPTIONS = (False, True)
+SEARCH_RUNS = 64  # seeds per corner while searching (one block of the simulator)
+LABEL = "corner-robust gains"
+
+ALTERNATIVES = (
+    "dither, since the machine has no periodic source (no oscillator or function generator in its "
+    "profile) and the bench profile states none",
+    "a dead-zone inverse, since it needs diodes or a comparator (a precision rectifier), which the "
+    "machine's profile does not list",
+)
+WHY_GAINS = ("tighter excursions raise the loop gain, so the dead zone's limit cycle stays small and the cart "
+             "inside the switches at every corner")
+
+
+@dataclass(frozen=True)
+class RobustChoice:
+    """The grid point chosen over the corners: its spec, the multipliers, its worst corner's runs
+    held of those run (and which scenario), and how many points were tried."""
+
+    spec: DesignSpec
+    factors: dict[str, float]
+    integral_s: bool
+    held: int
+    runs: int
+    worst_corner: dict[str, float]
+    tried: int
+    scenario: str  # where its worst corner is
+
+    def detail(self) -> str:
+        """The choice in a few words, for the table and the sheet."""
+        f = ", ".join(f"{k} x{v:.3g}" for k, v in self.factors.items() if v != 1.0) or "the spec's"
+        integ = ", integral of s" if self.integral_s else ""
+        corner = ", ".join(f"{k} {v:g}" for k, v in self.worst_corner.items())
+        return (f"Bryson excursions {f}{integ}, the best of {self.tried} designs run at every corner in every "
+                f"scenario: held {self.held}/{self.runs} at its worst ({self.scenario}, {corner})")
+
+
+def grid_specs(spec: DesignSpec, bench: BenchProfile) -> list[tuple[dict[str, float], bool, DesignSpec]]:
+    """Every grid point as a spec: the bench's actuator model, scaled Bryson excursions (or, for a
+    spec without Bryson weights, a scaled R only), with and without the integral of s."""
+    b = bench.actuator
+    act = spec.actuator.model_copy(update={"model": b.model, "K_U": b.K_U, "tau": b.tau,
+                                           "dead_zone_V": b.dead_zone_V})
+    w = spec.weights
+    out = []
+    names = [k for k in WEIGHT_GRID if w.bryson and k in w.bryson] if w.bryson else ["u"]
+    for integral in INTEGRAL_OPTIONS:
+        for combo in itertools.product(*(WEIGHT_GRID[k] for k in names)):
+            factors = dict(zip(names, combo))
+            if w.bryson:
+                weights = w.model_copy(update={"bryson": {k: float(f"{v * factors.get(k, 1.0):.6g}")
+                                                          for k, v in w.bryson.items()}})
+            elif w.R is not None:
+                weights = w.model_copy(update={"R": w.R / factors["u"] ** 2})
+            else:
+                weights = w
+            integ = spec.integrators.model_copy(update={"int_s": spec.integrators.int_s or integral})
+            if integral and spec.integrators.int_s:
+                continue  # the spec has it already
+            est = spec.estimator.model_copy(update={"rolloff_s": None, "observer_pole": None})
+            out.append((factors, integral, spec.model_copy(update={
+                "actuator": act, "weights": weights, "integrators": integ, "estimator": est})))
+    return out
+
+
+def excursion(st: BenchStudy) -> float:
+    """The cart's excursion at the study's worst corner for it: the largest 95th percentile of
+    max |s| (m) over the corners."""
+    return max(cart_excursion(c) for c in st.corners)
+
+
+def search(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenarios: Sequence[Scenario],
+           seed: int | None = None, progress: Callable[[int, int], None] | None = None) -> RobustChoice | None:
+    """The grid point held best at its worst corner of the bench's ranges (see the module docstring).
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The spec whose weights are varied.
+    machine, bench : MachineProfile, BenchProfile
+        The machine the patches are allocated on; the bench with its ranges.
+    scenarios : sequence of Scenario
+        Every one is run at every corner (the shortest first).
+    seed : int, optional
+        Its base seed (default: its own).
+    progress : callable, optional
+        ``progress(done, total)`` after each grid point.
+
+    Returns
+    -------
+    RobustChoice or None
+        None when the bench states no ranges or no grid point designs and fits.
+    """
+    if not bench.uncertainty.ranges or not scenarios:
+        return None
+    order = sorted(scenarios, key=lambda sc: sc.duration_s)  # the short ones first: a loser drops early
+    grid = grid_specs(spec, bench)
+    best, best_key, tried = None, None, 0
+    for i, (factors, integral, sp) in enumerate(grid):
+        if progress is not None:
+            progress(i, len(grid))
+        try:
+            d = design_on(sp, machine, bench)
+            net = build_patch(d, machine, 1)
+        except InputError:
+            continue
+        tried += 1
+        worst, room = None, 0.0
+        for sc in order:
+            st = study(net, plant_params(d.spec), bench, machine, sc, seed=seed, corner_runs=SEARCH_RUNS,
+                       stop_below=None if best_key is None else best_key[0])
+            if len(st.corners) < len(corner_values(bench, st.ranges)[0]):
+                worst = None
+                break  # dropped: a corner held less than the best's worst
+            w = st.worst_corner
+            if worst is None or w.outcome.held < worst[1].outcome.held:
+                worst = (sc.name, w)
+            room = max(room, excursion(st))
+        if worst is None:
+            continue
+        key = (worst[1].outcome.held, -round(room, 4))
+        if best_key is None or key > best_key:
+            best_key = key
+            best = RobustChoice(d.spec, factors, integral, worst[1].outcome.held, worst[1].outcome.runs,
+                                worst[1].values, 0, worst[0])
+    if progress is not None:
+        progress(len(grid), len(grid))
+    return None if best is None else RobustChoice(best.spec, best.factors, best.integral_s, best.held, best.runs,
+                                                  best.worst_corner, tried, best.scenario)

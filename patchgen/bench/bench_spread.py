@@ -124,3 +124,17 @@ def apply(spread: BenchSpread, values: np.ndarray, actuator: np.ndarray, gains: 
             gains[list(tgt[1])] = v
         else:
             noise_std[list(tgt[1])] = v * tgt[2]
+
+
+def drawn_values(spread: BenchSpread, actuator: np.ndarray, gains: np.ndarray, noise_std: np.ndarray) -> np.ndarray:
+    """One run's drawn values read back from its rows of the engine's arrays (apply's inverse), one
+    per key: what runs.csv reports, taken from what the engine was given."""
+    out = np.empty(len(spread.keys))
+    for i, tgt in enumerate(spread.target):
+        if tgt[0] == "actuator":
+            out[i] = actuator[tgt[1]]
+        elif tgt[0] == "gain":
+            out[i] = gains[tgt[1][0]] if tgt[1] else np.nan
+        else:
+            out[i] = noise_std[tgt[1][0]] / tgt[2] if tgt[1] and tgt[2] else np.nan
+    return out

@@ -45,6 +45,7 @@ from patchgen.bench.kernel import (
     Settings,
     Wiring,
 )
+from patchgen.plant.compiled import PLANT_VECTOR
 
 BENCH_DT_S = 0.002
 IDEAL_DT_S = 0.01
@@ -249,3 +250,19 @@ def _notice_if_compiling(dispatcher, args: tuple) -> None:
     if not _noticed and will_compile(dispatcher, args):
         _noticed = True
         print(COMPILE_NOTICE, file=sys.stderr, flush=True)
+
+
+def drawn(cfg: EngineConfig, draws: Draws) -> list[tuple[tuple[str, float], ...]]:
+    """Each run's drawn parameters, (name, value) in a fixed order: the plant's parameters that
+    --spread varies (by name), then the bench's ranges (by their [uncertainty] key). Empty tuples
+    when nothing is drawn."""
+    varied = [(i, name) for i, name in enumerate(PLANT_VECTOR) if cfg.plant_spread[i] != 0]
+    spread = cfg.bench_spread
+    out = []
+    for r in range(draws.plants.shape[0]):
+        row = [(name, float(draws.plants[r, i])) for i, name in varied]
+        if spread is not None:
+            vals = bench_spread.drawn_values(spread, draws.actuators[r], draws.sensor_gains[r], draws.noise_std[r])
+            row += [(k, float(v)) for k, v in zip(spread.keys, vals)]
+        out.append(tuple(row))
+    return out

@@ -65,18 +65,21 @@ def _history_csv(history: dict[str, np.ndarray]) -> str:
 
 
 def _runs_csv(result: SimResult) -> str:
-    """One line per run: held, trip and fall times, maxima, RMS theta, overloads."""
+    """One line per run: held, trip and fall times, maxima, RMS theta, overloads, and what the run
+    drew (plant parameters with --spread, the bench's ranges with --bench-spread)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
+    drawn = [name for name, _ in result.runs[0].drawn] if result.runs else []
     w.writerow(["run", "held", "limit_switch_tripped", "trip_time_s", "fallen",
                 "fall_time_s", "max_abs_theta_deg", "max_abs_s_m", "rms_theta_deg",
-                "max_abs_u_c_V", "max_abs_force_N", "overloads"])
+                "max_abs_u_c_V", "max_abs_force_N", "overloads"] + [f"drawn {n}" for n in drawn])
     for r in result.runs:
         w.writerow([r.run, int(r.held), int(r.limit_switch_tripped), _num(r.trip_time_s),
                     int(r.fallen), _num(r.fall_time_s), _num(r.max_abs_theta_deg),
                     _num(r.max_abs_s_m), _num(r.rms_theta_deg), _num(r.max_abs_u_c_V),
                     _num(r.max_abs_force_N),
-                    " ".join(f"{o.amplifier}@{_num(o.first_time_s)}" for o in r.overloads)])
+                    " ".join(f"{o.amplifier}@{_num(o.first_time_s)}" for o in r.overloads)]
+                   + [_num(v) for _, v in r.drawn])
     return buf.getvalue()
 
 

@@ -49,6 +49,7 @@ class RunSummary:
     max_abs_force_N: float
     overloads: tuple[Overload, ...]
     final_state: tuple[float, float, float, float]
+    drawn: tuple[tuple[str, float], ...] = ()  # the run's plant (--spread) and bench (--bench-spread) draws
 
 
 @dataclass(frozen=True)
@@ -125,7 +126,8 @@ class SimResult:
         }
 
 
-def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run: int = 0) -> list[RunSummary]:
+def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run: int = 0,
+                  drawn: list[tuple[tuple[str, float], ...]] | None = None) -> list[RunSummary]:
     """Each run's summary, from the engine's batches in run order.
 
     Parameters
@@ -136,6 +138,8 @@ def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run:
         The amplifiers in evaluation order (the engine's columns).
     first_run : int
         The first run's number.
+    drawn : list, optional
+        Each run's drawn parameters (patchgen.bench.engine.drawn), in run order.
 
     Returns
     -------
@@ -162,6 +166,7 @@ def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run:
                 Overload(amp_ids[j], _opt(ovl_first[i, j]), round(float(ovl_time[i, j]), 9))
                 for j in np.argsort(ovl_first[i], kind="stable") if not np.isnan(ovl_first[i, j])),
             final_state=tuple(float(v) for v in final[i]),
+            drawn=drawn[i] if drawn else (),
         )
         for i in range(len(trip))
     ]

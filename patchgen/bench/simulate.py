@@ -32,6 +32,7 @@ from patchgen.bench import budget
 from patchgen.bench.circuit import compile_circuit
 from patchgen.bench.configure import engine_config
 from patchgen.bench.engine import LANES, default_step, draw_batch, run_batch
+from patchgen.bench.engine import drawn as engine_drawn
 from patchgen.bench.kernel import HISTORY_CHANNELS
 from patchgen.bench.results import RunSummary, SimResult, distribution, run_summaries
 from patchgen.inputs.errors import InputError
@@ -106,15 +107,16 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     # batches of runs, for the progress calls: whole blocks, enough of them for the threads
     per_call = LANES * numba.get_num_threads()
     chunk = per_call * max(1, math.ceil(runs / 20 / per_call))
-    parts = []
+    parts, drawn = [], []
     for start in range(0, runs, chunk):
         stop = min(start + chunk, runs)
         draws = draw_batch(cfg, [np.random.default_rng([base_seed, first_run + i]) for i in range(start, stop)])
         parts.append(run_batch(cfg, draws, 1 if keep_history and start == 0 else 0))
+        drawn += engine_drawn(cfg, draws)
         if progress is not None:
             progress(stop)
 
-    summaries = run_summaries(parts, circuit.amp_ids, first_run)
+    summaries = run_summaries(parts, circuit.amp_ids, first_run, drawn)
     history = None
     if keep_history:
         h = parts[0].history[0, :parts[0].history_length[0]]

@@ -3,6 +3,8 @@ other draws are untouched, the draws follow their distribution, and the whole is
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -63,7 +65,11 @@ def test_a_drawn_run_is_the_run_on_the_bench_it_drew():
         assert draws.actuators[i, 0] == drawn["K_U"] and draws.actuators[i, 2] == drawn["dead_zone_V"]
         one = simulate(NET, PLANT, bench_at(EVERYTHING, drawn), GP6, PUSH, seed=3, runs=1, first_run=i,
                        keep_history=False)
-        assert one.runs[0] == spread.runs[i]
+        assert one.runs[0] == dataclasses.replace(spread.runs[i], drawn=())
+        # and the run reports what it drew (runs.csv): every key, read back from the engine's arrays
+        reported = dict(spread.runs[i].drawn)
+        assert list(reported) == list(cfg.bench_spread.keys)
+        assert reported == pytest.approx(drawn, rel=1e-12)
     # and the drawn benches differ from the nominal one: the spread is not a no-op
     nominal = simulate(NET, PLANT, EVERYTHING, GP6, PUSH, seed=3, runs=3, keep_history=False)
     assert [r.max_abs_theta_deg for r in nominal.runs] != [r.max_abs_theta_deg for r in spread.runs]
@@ -128,4 +134,5 @@ def test_a_range_of_one_value_is_that_value(dead_zone):
     one = fixed.model_copy(update={"uncertainty": BenchUncertainty(dead_zone_V=[dead_zone, dead_zone])})
     a = simulate(NET, PLANT, one, GP6, PUSH, seed=2, runs=2, keep_history=False, bench_spread=True)
     c = simulate(NET, PLANT, fixed, GP6, PUSH, seed=2, runs=2, keep_history=False)
-    assert a.runs == c.runs
+    assert [dataclasses.replace(r, drawn=()) for r in a.runs] == c.runs
+    assert all(r.drawn == (("dead_zone_V", dead_zone),) for r in a.runs)

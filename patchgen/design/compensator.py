@@ -53,6 +53,7 @@ class Compensator:
     D: np.ndarray
     hsv: np.ndarray
     method: str = "minimal"
+    unstable: int = 0  # leading states of A that are the compensator's own unstable modes (kept, never reduced)
 
     @property
     def order(self) -> int:
@@ -115,10 +116,35 @@ def compensator(design: Design) -> Compensator:
         C2 = C[:, ints] - C[:, rest] @ X
         R = C2 @ B[ints]
         A, B, C = A11, B1, C[:, rest]
-    Ab, Bb, Cb, hsv = balanced(A, B, C)
+    A, B, C, nu, hsv = _unstable_then_balanced(A, B, C, lambda re, im: re >= 0)
+    return Compensator(tuple(design.model.measured), R, A, B, C, D.copy(), hsv, unstable=nu)
+
+
+def _split(A: np.ndarray, B: np.ndarray, C: np.ndarray, first):
+    """Coordinates in which A is block diagonal, the modes ``first(re, im)`` selects leading
+    (ordered real Schur form, then a Sylvester equation for the coupling); returns (A, B, C, n_first)."""
+    Tq, Z, n1 = sla.schur(A, output="real", sort=first)
+    A, B, C = Tq, Z.T @ B, C @ Z
+    if n1 in (0, A.shape[0]):
+        return A, B, C, n1
+    k = np.arange(A.shape[0]) < n1
+    # x = Tm z with Tm = [[I, X], [0, I]] makes A block diagonal when A11 X - X A22 = -A12
+    X = sla.solve_sylvester(A[np.ix_(k, k)], -A[np.ix_(~k, ~k)], -A[np.ix_(k, ~k)])
+    Tm = np.eye(A.shape[0])
+    Tm[np.ix_(k, ~k)] = X
+    Ti = np.linalg.inv(Tm)
+    return Ti @ A @ Tm, Ti @ B, C @ Tm, n1
+
+
+def _unstable_then_balanced(A, B, C, unstable):
+    """The modes ``unstable`` selects kept as they are, first; the rest balanced and minimal."""
+    if A.shape[0] == 0:
+        return A, B, C, 0, np.zeros(0)
+    A, B, C, nu = _split(A, B, C, unstable)
+    Ab, Bb, Cb, hsv = balanced(A[nu:, nu:], B[nu:], C[:, nu:])
     keep = int(np.sum(hsv > MINIMAL_HSV * hsv[0])) if len(hsv) else 0
-    return Compensator(tuple(design.model.measured), R, Ab[:keep, :keep], Bb[:keep], Cb[:, :keep], D.copy(),
-                       hsv[:keep])
+    A = sla.block_diag(A[:nu, :nu], Ab[:keep, :keep])
+    return A, np.vstack([B[:nu], Bb[:keep]]), np.hstack([C[:, :nu], Cb[:, :keep]]), nu, hsv[:keep]
 
 
 def balanced(A: np.ndarray, B: np.ndarray, C: np.ndarray):
@@ -169,23 +195,14 @@ def without_fast_modes(c: Compensator, fastest: float) -> Compensator:
     frequency w. The rest is balanced again.
     """
     lam = np.linalg.eigvals(c.A)
-    slow = np.abs(lam) <= fastest
-    if slow.all():
+    if (np.abs(lam) <= fastest).all():
         return c
-    # real Schur with the slow modes first, then decouple the fast block by a Sylvester equation
-    Tq, Z, ns = sla.schur(c.A, output="real", sort=lambda re, im: abs(complex(re, im)) <= fastest)
-    A, B, C = Tq, Z.T @ c.B, c.C @ Z
+    A, B, C, ns = _split(c.A, c.B, c.C, lambda re, im: abs(complex(re, im)) <= fastest)
     keep = np.arange(A.shape[0]) < ns
-    # x = Tm z with Tm = [[I, X], [0, I]] makes A block diagonal when A11 X - X A22 = -A12
-    X = sla.solve_sylvester(A[np.ix_(keep, keep)], -A[np.ix_(~keep, ~keep)], -A[np.ix_(keep, ~keep)])
-    Tm = np.eye(A.shape[0])
-    Tm[np.ix_(keep, ~keep)] = X
-    Ti = np.linalg.inv(Tm)
-    A, B, C = Ti @ A @ Tm, Ti @ B, C @ Tm
     A2, B2, C2, D2 = residualise(A, B, C, c.D, keep)
-    Ab, Bb, Cb, hsv = balanced(A2, B2, C2)
-    return Compensator(c.inputs, c.R, Ab, Bb, Cb, D2, hsv, f"{c.method}, modes above {fastest:g} rad/s "
-                       "residualised")
+    A2, B2, C2, nu, hsv = _unstable_then_balanced(A2, B2, C2, lambda re, im: re >= 0)
+    return Compensator(c.inputs, c.R, A2, B2, C2, D2, hsv, f"{c.method}, modes above {fastest:g} rad/s "
+                       "residualised", unstable=nu)
 
 
 def reduced(c: Compensator, order: int, method: str = "truncate") -> Compensator:
@@ -206,22 +223,22 @@ def reduced(c: Compensator, order: int, method: str = "truncate") -> Compensator
     Compensator
         The reduced law; ``c`` itself when ``order`` is not below its own.
     """
-    n_int = 0 if c.R is None else 1
-    r = order - n_int
+    r = order - (0 if c.R is None else 1) - c.unstable
     if r < 0:
-        raise ValueError(f"order {order} drops the integral part")
-    n = c.A.shape[0]
+        raise ValueError(f"order {order} drops the integral part or an unstable mode")
+    n = c.A.shape[0] - c.unstable
     if r >= n:
         return c
-    keep = np.arange(n) < r
+    keep = np.arange(c.A.shape[0]) < c.unstable + r
     if method == "truncate":
-        A, B, C, D = c.A[:r, :r], c.B[:r], c.C[:, :r], c.D
+        A, B, C, D = c.A[np.ix_(keep, keep)], c.B[keep], c.C[:, keep], c.D
     elif method == "residualise":
         A, B, C, D = residualise(c.A, c.B, c.C, c.D, keep)
     else:
         raise ValueError(f"method must be 'truncate' or 'residualise' (got {method!r})")
     word = "balanced truncation" if method == "truncate" else "balanced singular perturbation"
-    return Compensator(c.inputs, c.R, A, B, C, D, c.hsv[:r], f"{c.method}; {word} to {order} states")
+    return Compensator(c.inputs, c.R, A, B, C, D, c.hsv[:r], f"{c.method}; {word} to {order} states",
+                       unstable=c.unstable)
 
 
 def margins(design: Design, c: Compensator) -> Margins:

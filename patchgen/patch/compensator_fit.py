@@ -20,13 +20,21 @@ from patchgen.design.controller import Controller
 from patchgen.design.lqg import Design, loop_with_controller
 from patchgen.design.margins import Margins, loop_margins
 from patchgen.inputs.errors import InputError, ResourceError
+from patchgen.patch import large_gains
 from patchgen.patch.allocation import allocate
-from patchgen.patch.compensator_forms import FORMS, coefficient_range, peaks, form_system, realize_compensator
+from patchgen.patch.compensator_forms import (
+    AMPLITUDE,
+    FORMS,
+    coefficient_range,
+    excursion_peaks,
+    realize_compensator,
+)
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import wired_law
 from patchgen.profiles.machine import MachineProfile
 
 METHODS = ("truncate", "residualise")
+SHRINK_ROUNDS = 4  # placements of one law and form while scaling down the states that overload
 
 
 @dataclass(frozen=True)
@@ -41,7 +49,7 @@ class Fit:
     netlist: Netlist | None = None
     error: str | None = None
     coefficients: tuple[float, float] = (0.0, 0.0)  # smallest and largest magnitude
-    peak_fraction: float = 0.0  # the largest state's peak over the scaling excursions / reference
+    peak_fraction: float = 0.0  # the largest amplifier's peak over the scaling excursions / reference
     dialled_margins: Margins | None = field(default=None, compare=False)
 
     @property
@@ -78,7 +86,7 @@ class Fit:
         marg = (f"dialled loop GM {_db(m.lower_gm_db)}/{_db(m.upper_gm_db)} dB, PM {m.pm_deg:.1f} deg"
                 if m is not None and m.stable and m.pm_deg is not None else "dialled loop unstable")
         return (f"{head}: {self.units} unit(s), {self.amplifiers} amplifiers, {self.pots} pots, coefficients "
-                f"{self.coefficients[0]:.3g}..{self.coefficients[1]:.3g}, peak {self.peak_fraction:.2f} of the "
+                f"{self.coefficients[0]:.3g}..{self.coefficients[1]:.3g}, largest amplifier {self.peak_fraction:.2f} of the "
                 f"reference, {marg}")
 
 
@@ -87,14 +95,15 @@ def _db(x: float | None) -> str:
 
 
 def laws(design: Design, machine: MachineProfile, method: str = "auto") -> list[tuple[int, str, comp.Compensator]]:
-    """The minimal law (modes faster than the largest input weight reaches residualised) and each
+    """The minimal law (modes faster than a gain stage into a full-weight input reaches, the top
+    gain squared, residualised) and each
     lower order down to the integral part alone: (order, method, law), highest order first."""
-    fastest = max(machine.input_weights) * machine.pot_max / machine.time_scale_s
+    fastest = large_gains.top_gain(machine) ** 2 / machine.time_scale_s
     full = comp.without_fast_modes(comp.compensator(design), fastest)
     out = [(full.order, "minimal", full)]
     methods = METHODS if method == "auto" else (method,)
-    low = 1 if full.R is not None else 1
-    for order in range(full.order - 1, low - 1, -1):
+    low = (0 if full.R is None else 1) + full.unstable
+    for order in range(full.order - 1, max(low, 1) - 1, -1):
         for m in methods:
             out.append((order, m, comp.reduced(full, order, m)))
     return out
@@ -111,30 +120,75 @@ def dialled_margins(design: Design, net: Netlist) -> Margins:
     return loop_margins(A, B, C)
 
 
+def _loop(design: Design, net: Netlist):
+    """The design model's plant closed by the wired law (SI plant states, then the law's states),
+    and each amplifier's output as a row over those states."""
+    model = design.model
+    keep = [i for i, s in enumerate(model.states) if not s.startswith("int_")]
+    Ap, Bp, Cp = model.A[np.ix_(keep, keep)], model.B[keep], model.C[:, keep]
+    vpu = {s.id: s.volts_per_unit for s in net.sensors}
+    law = wired_law(net)
+    ks = np.diag([vpu[s] for s in law.inputs])
+    KU = net.output.K_U_N_per_V
+    Acl = np.block([[Ap + Bp @ (KU * law.Dc) @ ks @ Cp, Bp @ (KU * law.Cc)], [law.Bc @ ks @ Cp, law.Ac]])
+    rows = {}
+    for a in net.amplifiers:
+        la = wired_law(net, a.id)
+        rows[a.id] = np.hstack([la.Dc @ ks @ Cp, la.Cc])[0]
+    return Acl, rows, [[model.states[i] for i in keep].index(s) for s in ("theta", "s")]
+
+
+def amplifier_peaks(design: Design, net: Netlist) -> dict[str, float]:
+    """Each amplifier's largest |output| (V) over the scaling excursions, the wired loop on the design model."""
+    Acl, rows, where = _loop(design, net)
+    ids = list(rows)
+    peak = excursion_peaks(Acl, np.vstack([rows[i] for i in ids]), where)
+    return dict(zip(ids, (float(p) for p in peak)))
+
+
+def _block_of(quantity: str) -> str:
+    """The compensator block an amplifier serves: its own, its partial sum's or its gain stage's."""
+    q = quantity.removeprefix("partial ")
+    return q.split(f"_{large_gains.PREFIX}")[0]
+
+
 def try_fit(design: Design, order: int, method: str, law: comp.Compensator, form: str, machine: MachineProfile,
             units: list[int]) -> Fit:
-    """Place one law in one form on the fewest of ``units`` slaved units that takes it."""
+    """Place one law in one form on the fewest of ``units`` slaved units that takes it; a state whose
+    amplifiers (its own, its partial sum, its gain stage) pass AMPLITUDE of the reference over the
+    scaling excursions is scaled down and placed again (SHRINK_ROUNDS at most)."""
     dm = comp.margins(design, law)
     if not dm.stable:
         return Fit(order, method, form, law, dm, error="the loop with this law is unstable on the design model")
-    real = realize_compensator(design, law, form, machine)
-    fs = form_system(law, form)
-    pI, px = peaks(design, law, fs)
-    vpu = {b.name: b.volts_per_unit for b in real.blocks}
-    volts = [pI * vpu["int"]] if "int" in vpu else []
-    volts += [p * vpu[f"c{i + 1}"] for i, p in enumerate(px)]
-    peak = max(volts, default=0.0) / machine.reference_V
-    rng = coefficient_range(real)
+    shrink: dict[str, float] = {}
     err = None
-    for n in units:
-        try:
-            net = allocate(real, machine.slaved(n), design.spec.path)
-        except (ResourceError, InputError) as exc:
-            err = exc.message
-            continue
-        net = net.model_copy(update={"units": n, "machine_name": machine.name})
-        return Fit(order, method, form, law, dm, net, None, rng, peak, dialled_margins(design, net))
-    return Fit(order, method, form, law, dm, error=err, coefficients=rng, peak_fraction=peak)
+    for _ in range(SHRINK_ROUNDS):
+        real = realize_compensator(design, law, form, machine, shrink)
+        rng = coefficient_range(real, machine.pot_resolution)
+        net = None
+        for n in units:
+            try:
+                net = allocate(real, machine.slaved(n), design.spec.path)
+            except (ResourceError, InputError) as exc:
+                err = exc.message
+                continue
+            net = net.model_copy(update={"units": n, "machine_name": machine.name})
+            break
+        if net is None:
+            return Fit(order, method, form, law, dm, error=err, coefficients=rng)
+        peaks = amplifier_peaks(design, net)
+        limit = AMPLITUDE * machine.reference_V
+        over = {}
+        for a in net.amplifiers:
+            b = _block_of(a.carries.quantity)
+            if peaks[a.id] > limit and b != "u_c":
+                over[b] = min(over.get(b, 1.0), limit / peaks[a.id])
+        if not over:
+            break
+        for b, f in over.items():
+            shrink[b] = shrink.get(b, 1.0) * f
+    peak = max(peaks.values()) / machine.reference_V
+    return Fit(order, method, form, law, dm, net, None, rng, peak, dialled_margins(design, net))
 
 
 def fits(design: Design, machine: MachineProfile, units: list[int], form: str = "auto",

@@ -127,25 +127,35 @@ def peaks(design: Design, c: Compensator, fs: FormSystem) -> tuple[float, np.nda
         [Ap + Bp @ c.D @ Cp, Bp @ Cc],
         [np.vstack([R @ Cp, fs.B @ Cp]), sla.block_diag(np.zeros((ni, ni)), fs.A)],
     ])
-    Phi = sla.expm(Acl * SCALING_STEP_S)
-    steps = int(round(SCALING_HORIZON_S / SCALING_STEP_S))
-    peak = np.zeros(ni + m)
-    for state, value in (("theta", SCALING_THETA0_RAD), ("s", SCALING_S0_M)):
-        x = np.zeros(n + ni + m)
-        x[[model.states[i] for i in keep].index(state)] = value
-        for _ in range(steps):
-            x = Phi @ x
-            peak = np.maximum(peak, np.abs(x[n:]))
-            if not np.all(np.isfinite(x)) or np.abs(x).max() > 1e12:
-                break
+    Cout = np.hstack([np.zeros((ni + m, n)), np.eye(ni + m)])
+    peak = excursion_peaks(Acl, Cout, [[model.states[i] for i in keep].index(s) for s in ("theta", "s")])
     return (float(peak[0]) if ni else 0.0), peak[ni:]
 
 
-def _scale(peak: float, reference: float, into: list[float], outof: list[float], weights) -> float:
-    """sigma for one state: peak at AMPLITUDE of the reference (lower if an input coefficient, which
-    grows with sigma, would pass the largest weight), then lowered by at most EXACT_SPAN so that a
+def excursion_peaks(Acl: np.ndarray, Cout: np.ndarray, where: list[int]) -> np.ndarray:
+    """The largest |Cout x| of the closed loop x' = Acl x released from SCALING_THETA0_RAD on state
+    ``where[0]`` and, separately, from SCALING_S0_M on state ``where[1]``, sampled every
+    SCALING_STEP_S for SCALING_HORIZON_S."""
+    Phi = sla.expm(Acl * SCALING_STEP_S)
+    steps = int(round(SCALING_HORIZON_S / SCALING_STEP_S))
+    peak = np.zeros(Cout.shape[0])
+    for i, value in zip(where, (SCALING_THETA0_RAD, SCALING_S0_M)):
+        x = np.zeros(Acl.shape[0])
+        x[i] = value
+        for _ in range(steps):
+            x = Phi @ x
+            peak = np.maximum(peak, np.abs(Cout @ x))
+            if not np.all(np.isfinite(x)) or np.abs(x).max() > 1e12:
+                break
+    return peak
+
+
+def _scale(peak: float, reference: float, into: list[float], outof: list[float], weights, rate: float) -> float:
+    """sigma for one state: peak at AMPLITUDE of the reference (divided by the gain stage its own
+    rate ``rate`` needs beyond the largest weight, and lower if an input coefficient, which grows
+    with sigma, would pass the largest weight), then lowered by at most EXACT_SPAN so that a
     coefficient proportional to sigma (``into``: the factor) or to 1/sigma (``outof``) is a weight."""
-    top = AMPLITUDE * reference / peak if peak > 0 else 1.0
+    top = AMPLITUDE * reference / max(1.0, rate / max(weights)) / peak if peak > 0 else 1.0
     biggest = max(into, default=0.0)
     if biggest > 0:
         top = min(top, max(weights) / biggest)
@@ -154,7 +164,8 @@ def _scale(peak: float, reference: float, into: list[float], outof: list[float],
     return max(ok) if ok else top
 
 
-def realize_compensator(design: Design, c: Compensator, form: str, machine: MachineProfile) -> Realization:
+def realize_compensator(design: Design, c: Compensator, form: str, machine: MachineProfile,
+                        shrink: dict[str, float] | None = None) -> Realization:
     """The compensator in ``form`` as integrate blocks and the u_c summer, in machine volts.
 
     Parameters
@@ -167,6 +178,9 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
         One of FORMS.
     machine : MachineProfile
         Its time scale, reference and input weights.
+    shrink : dict, optional
+        A factor (below 1) on a state's voltage, by block name: for a state whose partial sum or
+        gain stage would leave the reference (patchgen.patch.compensator_fit).
 
     Returns
     -------
@@ -179,17 +193,19 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
     KU, T, ref = spec.actuator.K_U, machine.time_scale_s, machine.reference_V
     weights = [float(w) for w in machine.input_weights]
     fs = form_system(c, form)
+    shrink = shrink or {}
     pI, px = peaks(design, c, fs)
     n = fs.A.shape[0]
     blocks: list[Block] = []
     sig: dict[str, float] = {}
     if c.R is not None:
         into = [abs(T * c.R[0, k]) / ks[m] for k, m in enumerate(y)]
-        sig["int"] = _scale(pI, ref, into, [1.0 / KU], weights)
+        sig["int"] = _scale(pI, ref * shrink.get("int", 1.0), into, [1.0 / KU], weights, 0.0)
     names = [f"c{i + 1}" for i in range(n)]
     for i, nm in enumerate(names):
         into = [abs(T * fs.B[i, k]) / ks[m] for k, m in enumerate(y)]
-        sig[nm] = _scale(px[i], ref, into, [abs(fs.C[0, i]) / KU], weights)
+        rate = T * max(np.abs(fs.A[i]).max(), np.abs(fs.A[:, i]).max())
+        sig[nm] = _scale(px[i], ref * shrink.get(nm, 1.0), into, [abs(fs.C[0, i]) / KU], weights, rate)
 
     def coeff(x: float) -> float:
         return next((math.copysign(w, x) for w in weights if math.isclose(abs(x), w, rel_tol=1e-9)), x)
@@ -215,7 +231,7 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
     return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, notes)
 
 
-def coefficient_range(real: Realization) -> tuple[float, float]:
-    """The smallest and largest coefficient magnitude of a realisation's terms."""
-    mags = [abs(t.coeff) for b in real.blocks for t in b.terms if t.coeff]
+def coefficient_range(real: Realization, resolution: float) -> tuple[float, float]:
+    """The smallest and largest coefficient magnitude of a realisation's terms (those the dial reaches)."""
+    mags = [abs(t.coeff) for b in real.blocks for t in b.terms if abs(t.coeff) >= resolution / 2]
     return (min(mags), max(mags)) if mags else (0.0, 0.0)

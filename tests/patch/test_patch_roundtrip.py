@@ -184,8 +184,9 @@ def test_two_slaved_units_when_one_is_not_enough():
     check_roundtrip(d, net, m.pot_resolution)
 
 
-def test_units_beyond_the_profile_are_refused():
+def test_units_beyond_the_profiles_default_are_the_users():
     d, m = design_from_path(design_path("thesis-ch5"))
-    with pytest.raises(InputError) as exc:
-        build_patch(d, m, 3)
-    assert "patch.units" in exc.value.line() and "1 to 2" in exc.value.line()
+    assert m.max_units == 2
+    net = build_patch(d, m, 3)
+    assert net.units == 3 and all(a.id.startswith(("U1.", "U2.", "U3.")) for a in net.amplifiers)
+    check_roundtrip(d, net, m.pot_resolution)

@@ -86,8 +86,8 @@ class Fit:
         marg = (f"dialled loop GM {_db(m.lower_gm_db)}/{_db(m.upper_gm_db)} dB, PM {m.pm_deg:.1f} deg"
                 if m is not None and m.stable and m.pm_deg is not None else "dialled loop unstable")
         return (f"{head}: {self.units} unit(s), {self.amplifiers} amplifiers, {self.pots} pots, coefficients "
-                f"{self.coefficients[0]:.3g}..{self.coefficients[1]:.3g}, largest amplifier {self.peak_fraction:.2f} of the "
-                f"reference, {marg}")
+                f"{self.coefficients[0]:.3g}..{self.coefficients[1]:.3g}, largest amplifier "
+                f"{self.peak_fraction:.2f} of the reference, {marg}")
 
 
 def _db(x: float | None) -> str:

@@ -39,6 +39,7 @@ from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.studies.compensator_candidates import compensator_specs
 from patchgen.studies.ranking import DECISIONS, ROUND_RUNS, TARGET, ScenarioOutcome, decision, outcome, weakest
 
 CANDIDATES = (
@@ -214,7 +215,9 @@ def prepare(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile) -> l
         In candidate_specs order; one that does not design or fit keeps its one-line error.
     """
     out = []
-    for label, kind, sp in candidate_specs(spec, bench):
+    specs = candidate_specs(spec, bench)
+    specs += compensator_specs(specs, machine, bench)
+    for label, kind, sp in specs:
         try:
             d = design_on(sp, machine, bench)
         except InputError as exc:

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from patchgen.cli.design import design_from_path
 from patchgen.design.lqg import design, design_on
-from patchgen.inputs.errors import InputError, ResourceError
+from patchgen.inputs.errors import ResourceError
 from patchgen.inputs.spec import DesignSpec, check_spec
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist

@@ -172,6 +172,9 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
         if _JACKS not in exc.message:  # short of amplifiers or pots already: a gain stage only adds to that
             raise
     stages, staged, stage_notes = large_gains.gain_stages(real, kept, machine)
+    if any(large_gains.too_big(t, machine) for st in stages for t in st.terms):
+        raise ResourceError(source, "machine", too_big[0] + f" ({len(too_big)} such coefficients), beyond what a "
+                            "second input or one gain stage reaches")
     try:
         return _place(replace(real, blocks=tuple(stages) + real.blocks), stages + blocks, staged, notes + stage_notes,
                       machine, source)

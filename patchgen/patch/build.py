@@ -22,8 +22,8 @@ def build_patch(design: Design, machine: MachineProfile, units: int | str | None
     units = spec.patch.units if units is None else units
     cap = spec.patch.max_units or machine.max_units
     tries = list(range(1, cap + 1)) if units == "auto" else [units]
-    if spec.patch.realization == "compensator":
-        return _place_compensator(design, machine, tries)
+    if spec.patch.realization == "compensator" and design.controller is not None:
+        return _place_compensator(design, machine, tries)  # plain state feedback has no other form
     real = realize(design, machine)
     _check_law_reaches_pots(real, machine, spec)
     for n in tries:
@@ -38,9 +38,6 @@ def build_patch(design: Design, machine: MachineProfile, units: int | str | None
 def _place_compensator(design: Design, machine: MachineProfile, tries: list[int]) -> Netlist:
     """The compensator at the spec's order and form on the fewest of ``tries`` units that takes it."""
     spec = design.spec
-    if design.controller is None:
-        raise spec.error("patch.realization", "\"compensator\" needs an estimator (estimator.kind is "
-                         f"{spec.estimator.kind!r}: the law is plain state feedback)")
     p = spec.patch
     full = compensator_fit.laws(design, machine, "truncate")[0][0]
     if p.order != "full" and p.order > full:
@@ -60,6 +57,11 @@ def no_fit_line(tried: list, machine: MachineProfile, cap: int) -> str:
     """One line: the smallest realisation found and what it needs."""
     short = [f for f in tried if f.error is not None and "unstable" not in f.error]
     if not short:
+        placed = [f for f in tried if f.netlist is not None]
+        if placed:
+            f = min(placed, key=lambda f: f.peak_fraction)
+            return (f"no realisation keeps every amplifier within the reference and the loop stable as dialled; "
+                    f"the nearest, order {f.order} in {f.form} form, reaches {f.peak_fraction:.2f} of the reference")
         return "no realisation of the compensator at this order keeps the loop stable"
     f = short[0]
     return (f"no realisation fits {cap} unit(s) of the {machine.name}; the smallest tried, order {f.order} "

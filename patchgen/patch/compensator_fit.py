@@ -28,6 +28,7 @@ from patchgen.patch.compensator_forms import (
     coefficient_range,
     excursion_peaks,
     realize_compensator,
+    scaling_plants,
 )
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import wired_law
@@ -120,30 +121,21 @@ def dialled_margins(design: Design, net: Netlist) -> Margins:
     return loop_margins(A, B, C)
 
 
-def _loop(design: Design, net: Netlist):
-    """The design model's plant closed by the wired law (SI plant states, then the law's states),
-    and each amplifier's output as a row over those states."""
-    model = design.model
-    keep = [i for i, s in enumerate(model.states) if not s.startswith("int_")]
-    Ap, Bp, Cp = model.A[np.ix_(keep, keep)], model.B[keep], model.C[:, keep]
+def amplifier_peaks(design: Design, net: Netlist) -> dict[str, float]:
+    """Each amplifier's largest |output| (V) over the scaling excursions: the wired law closing each
+    scaling plant (patchgen.patch.compensator_forms.scaling_plants)."""
     vpu = {s.id: s.volts_per_unit for s in net.sensors}
     law = wired_law(net)
     ks = np.diag([vpu[s] for s in law.inputs])
     KU = net.output.K_U_N_per_V
-    Acl = np.block([[Ap + Bp @ (KU * law.Dc) @ ks @ Cp, Bp @ (KU * law.Cc)], [law.Bc @ ks @ Cp, law.Ac]])
-    rows = {}
-    for a in net.amplifiers:
-        la = wired_law(net, a.id)
-        rows[a.id] = np.hstack([la.Dc @ ks @ Cp, la.Cc])[0]
-    return Acl, rows, [[model.states[i] for i in keep].index(s) for s in ("theta", "s")]
-
-
-def amplifier_peaks(design: Design, net: Netlist) -> dict[str, float]:
-    """Each amplifier's largest |output| (V) over the scaling excursions, the wired loop on the design model."""
-    Acl, rows, where = _loop(design, net)
-    ids = list(rows)
-    peak = excursion_peaks(Acl, np.vstack([rows[i] for i in ids]), where)
-    return dict(zip(ids, (float(p) for p in peak)))
+    outs = {a.id: wired_law(net, a.id) for a in net.amplifiers}
+    peak = {a: 0.0 for a in outs}
+    for Ap, Bp, Cp, names in scaling_plants(design):
+        Acl = np.block([[Ap + Bp @ (KU * law.Dc) @ ks @ Cp, Bp @ (KU * law.Cc)], [law.Bc @ ks @ Cp, law.Ac]])
+        rows = np.vstack([np.hstack([la.Dc @ ks @ Cp, la.Cc]) for la in outs.values()])
+        p = excursion_peaks(Acl, rows, [names.index(s) for s in ("theta", "s")])
+        peak = {a: max(peak[a], float(v)) for a, v in zip(outs, p)}
+    return peak
 
 
 def _block_of(quantity: str) -> str:
@@ -223,8 +215,9 @@ def fits(design: Design, machine: MachineProfile, units: list[int], form: str = 
 
 
 def best(candidates: list[Fit]) -> Fit | None:
-    """The cheapest realisation of the highest order that fits with a stable dialled loop."""
-    ok = [f for f in candidates if f.netlist is not None and f.holds_dialled]
+    """The cheapest realisation of the highest order that fits with a stable dialled loop and no
+    amplifier past the reference over the scaling excursions."""
+    ok = [f for f in candidates if f.netlist is not None and f.holds_dialled and f.peak_fraction <= 1.0]
     if not ok:
         return None
     top = max(f.order for f in ok)

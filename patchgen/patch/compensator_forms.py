@@ -15,7 +15,8 @@ Forms of the stable part (the integral part is always one integrator of R y):
 
 Scaling: state i's voltage is sigma_i x_i. The loop (design model and this compensator) is run from
 the scaling excursions (the largest initial angle and cart step of the shipped scenarios) and
-sigma_i is chosen so that the state's peak is AMPLITUDE of the reference; then lowered, by at most
+sigma_i is chosen so that the state's peak is AMPLITUDE of the reference (over the design model's
+loop and, when it models the actuator, the loop with the actuator a pure gain as well); then lowered, by at most
 EXACT_SPAN, to the largest sigma that makes one of the state's input or output coefficients equal
 to an input weight exactly (that term needs no pot).
 """
@@ -30,7 +31,9 @@ import scipy.linalg as sla
 
 from patchgen.design.compensator import Compensator
 from patchgen.design.lqg import Design
+from patchgen.design.model import plant_params
 from patchgen.patch.realization import Block, Realization, Term
+from patchgen.plant.equations import linear_matrices
 from patchgen.profiles.machine import MachineProfile
 
 FORMS = ("modal", "observer", "balanced")
@@ -109,26 +112,43 @@ def _modal_basis(A: np.ndarray, C: np.ndarray) -> np.ndarray:
     return np.column_stack(cols)
 
 
+def scaling_plants(design: Design) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]]:
+    """The plants a patch is scaled over: the design model's (its actuator model included) and the
+    plant of eq. 2.28 with the actuator a pure gain (the loop as an ideal bench closes it), each as
+    (A, B, C of the measured signals, state names)."""
+    model = design.model
+    keep = [i for i, s in enumerate(model.states) if not s.startswith("int_")]
+    out = [(model.A[np.ix_(keep, keep)], model.B[keep], model.C[:, keep], [model.states[i] for i in keep])]
+    if len(keep) > 4:
+        Ap, Bp = linear_matrices(plant_params(design.spec))
+        Cp = np.zeros((len(model.measured), 4))
+        names = ["s", "theta", "s_dot", "theta_dot"]
+        for r, m in enumerate(model.measured):
+            Cp[r, names.index(m)] = 1.0
+        out.append((Ap, Bp, Cp, names))
+    return out
+
+
 def peaks(design: Design, c: Compensator, fs: FormSystem) -> tuple[float, np.ndarray]:
     """The largest |x_I| and each |x_i| of the form's states over the scaling excursions (SI).
 
-    The closed loop of the design model's plant and the compensator (integral state and stable
-    part in the form's coordinates) from theta = SCALING_THETA0_RAD and, separately, from
-    s = SCALING_S0_M, sampled every SCALING_STEP_S for SCALING_HORIZON_S.
+    The closed loop of each scaling plant (:func:`scaling_plants`) and the compensator (integral
+    state and stable part in the form's coordinates) from theta = SCALING_THETA0_RAD and,
+    separately, from s = SCALING_S0_M, sampled every SCALING_STEP_S for SCALING_HORIZON_S.
     """
-    model = design.model
-    keep = [i for i, s in enumerate(model.states) if not s.startswith("int_")]
-    Ap, Bp, Cp = model.A[np.ix_(keep, keep)], model.B[keep], model.C[:, keep]
-    n, m = len(keep), fs.A.shape[0]
+    m = fs.A.shape[0]
     ni = 0 if c.R is None else 1
-    R = c.R if c.R is not None else np.zeros((0, Cp.shape[0]))
-    Cc = np.hstack([np.ones((1, ni)), fs.C])
-    Acl = np.block([
-        [Ap + Bp @ c.D @ Cp, Bp @ Cc],
-        [np.vstack([R @ Cp, fs.B @ Cp]), sla.block_diag(np.zeros((ni, ni)), fs.A)],
-    ])
-    Cout = np.hstack([np.zeros((ni + m, n)), np.eye(ni + m)])
-    peak = excursion_peaks(Acl, Cout, [[model.states[i] for i in keep].index(s) for s in ("theta", "s")])
+    peak = np.zeros(ni + m)
+    for Ap, Bp, Cp, names in scaling_plants(design):
+        n = Ap.shape[0]
+        R = c.R if c.R is not None else np.zeros((0, Cp.shape[0]))
+        Cc = np.hstack([np.ones((1, ni)), fs.C])
+        Acl = np.block([
+            [Ap + Bp @ c.D @ Cp, Bp @ Cc],
+            [np.vstack([R @ Cp, fs.B @ Cp]), sla.block_diag(np.zeros((ni, ni)), fs.A)],
+        ])
+        Cout = np.hstack([np.zeros((ni + m, n)), np.eye(ni + m)])
+        peak = np.maximum(peak, excursion_peaks(Acl, Cout, [names.index(s) for s in ("theta", "s")]))
     return (float(peak[0]) if ni else 0.0), peak[ni:]
 
 
@@ -206,6 +226,12 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
         into = [abs(T * fs.B[i, k]) / ks[m] for k, m in enumerate(y)]
         rate = T * max(np.abs(fs.A[i]).max(), np.abs(fs.A[:, i]).max())
         sig[nm] = _scale(px[i], ref * shrink.get(nm, 1.0), into, [abs(fs.C[0, i]) / KU], weights, rate)
+
+    if form == "modal":  # a complex pair's two states share one scale: its rotation stays balanced
+        for i in range(n):
+            for j in range(i + 1, n):
+                if fs.A[i, j] and fs.A[j, i]:
+                    sig[names[i]] = sig[names[j]] = min(sig[names[i]], sig[names[j]])
 
     def coeff(x: float) -> float:
         return next((math.copysign(w, x) for w in weights if math.isclose(abs(x), w, rel_tol=1e-9)), x)

@@ -77,12 +77,15 @@ def test_ch5_each_pot_within_half_a_dial_step():
 
 
 @pytest.mark.parametrize("name", ["thesis-case1", "thesis-case1-noint", "thesis-case2", "thesis-case3"])
-def test_kalman_designs_do_not_fit_a_gp6(name):
+def test_kalman_designs_as_estimator_states_do_not_fit_a_gp6(name):
     d, m = design_from_path(design_path(name))
+    states = d.spec.model_copy(update={"patch": d.spec.patch.model_copy(update={"realization": "states", "units": 1})})
     with pytest.raises(ResourceError) as exc:
-        build_patch(d, m)
+        build_patch(design_on(states, m, None), m)
     line = exc.value.line()
     assert "needs" in line and "has 8 amplifiers (4 integrators) and 8 pots" in line
+    # as one system they patch on three units
+    assert build_patch(d, m).units == 3
 
 
 @st.composite

@@ -27,7 +27,7 @@ def test_two_runs_same_bytes(tmp_path, args):
 
 
 def test_failed_patch_writes_nothing(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "patchgen", "patch", "thesis-case1", "-o",
+    r = subprocess.run([sys.executable, "-m", "patchgen", "patch", "thesis-case1-noint", "-o",
                         str(tmp_path / "o")], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 2 and "needs" in r.stderr and "has 8 amplifiers" in r.stderr
     assert not (tmp_path / "o").exists()

@@ -30,6 +30,7 @@ NOISE_MAX = 1e12  # entries of the estimator's W and V
 GAMMA_MAX = 1e6  # entries of the noise input matrix Gamma
 MIN_V_EIGENVALUE = 1e-12  # the measurement noise is inverted: it must be clear of singular
 RHO_LIMIT = 1e12  # LTR factor on W and its cap: the ceiling of the noise entries it scales (NOISE_MAX)
+MAX_ORDER = 20  # compensator states: beyond any design patchgen builds (at most 7 model states)
 MAX_UNITS = 16  # machines slaved together: the cap a machine profile's max_units has too
 SYMMETRY_TOL = 1e-12  # relative: a full Q this close to its transpose is symmetric (rounding in the file)
 PSD_TOL = 1e-10  # relative: an eigenvalue of Q above -1e-10 x its largest entry counts as 0
@@ -117,7 +118,20 @@ class PatchSpec(InputModel):
 
     units: Annotated[Int, Field(ge=1, le=MAX_UNITS)] | Literal["auto"] = Field(
         default=1, description="machines slaved together: a number, or \"auto\" for the fewest that fit "
-        "(at most the profile's max_units)")
+        "(at most max_units)")
+    max_units: Annotated[Int, Field(ge=1, le=MAX_UNITS)] | None = Field(
+        default=None, description="the most slaved units \"auto\" may take (none: the machine profile's max_units)")
+    realization: Literal["states", "compensator"] = Field(
+        default="states", description="an estimator wired as its states then state feedback, or the whole "
+        "compensator as one system in the form that fits the machine best")
+    order: Annotated[Int, Field(ge=1, le=MAX_ORDER)] | Literal["full"] = Field(
+        default="full", description="compensator: states in all (the integral part's one among them), or "
+        "\"full\" for the minimal realisation")
+    form: Literal["auto", "modal", "observer", "balanced"] = Field(
+        default="auto", description="compensator: the state-space form, or \"auto\" for the cheapest that fits")
+    reduction: Literal["auto", "truncate", "residualise"] = Field(
+        default="auto", description="compensator below full order: balanced truncation, balanced singular "
+        "perturbation, or \"auto\" for the one that fits best")
     below_resolution: Literal["round", "minimum", "omit"] = Field(
         default="round", description="a coefficient below the pot resolution: round to the dial, "
         "set the minimum dial value, or leave the signal out")

@@ -162,8 +162,14 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
     if not too_big:
         return _place(real, blocks, kept, notes, machine, source)
     big = [t for ts in kept.values() for t in ts if large_gains.too_big(t, machine)]
-    split = {b: large_gains.split_terms(ts, machine) for b, ts in kept.items()}
+    jacks = max(sum(a.input_count(w) for w in machine.input_weights) for a in machine.amplifiers)
     top = large_gains.top_gain(machine)
+    if any(abs(t.coeff) > top * top and abs(t.coeff) > top * jacks for t in big):
+        _check_lower_bound(blocks, kept, machine, source)  # short of amplifiers or pots: say that first
+        # beyond every jack of an amplifier and beyond one gain stage: neither can carry it
+        raise ResourceError(source, "machine", too_big[0] + f" ({len(too_big)} such coefficients), beyond what "
+                            "the inputs of one amplifier or one gain stage reach")
+    split = {b: large_gains.split_terms(ts, machine) for b, ts in kept.items()}
     how = [f"{t.signal}: coefficient {t.coeff:.4g} split across {math.ceil(abs(t.coeff) / top)} inputs of the "
            "same amplifier" for t in big]
     try:
@@ -172,6 +178,9 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
         if _JACKS not in exc.message:  # short of amplifiers or pots already: a gain stage only adds to that
             raise
     stages, staged, stage_notes = large_gains.gain_stages(real, kept, machine)
+    if any(large_gains.too_big(t, machine) for st in stages for t in st.terms):
+        raise ResourceError(source, "machine", too_big[0] + f" ({len(too_big)} such coefficients), beyond what a "
+                            "second input or one gain stage reaches")
     try:
         return _place(replace(real, blocks=tuple(stages) + real.blocks), stages + blocks, staged, notes + stage_notes,
                       machine, source)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from patchgen.design.lqg import Design
 from patchgen.inputs.errors import ResourceError
+from patchgen.patch import compensator_fit
 from patchgen.patch.allocation import allocate
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.parts import parts_for
@@ -13,22 +14,58 @@ from patchgen.profiles.machine import MachineProfile
 
 def build_patch(design: Design, machine: MachineProfile, units: int | str | None = None) -> Netlist:
     """Scale the design into machine volts and place it on ``units`` slaved machines (default: the
-    spec's [patch] units; "auto" takes the fewest that fit, up to the profile's max_units)."""
+    spec's [patch] units; "auto" takes the fewest that fit, up to the spec's max_units, else the
+    profile's). With ``[patch] realization = "compensator"`` the law is placed as one system
+    (patchgen.patch.compensator_fit): the spec's order and form, or the cheapest form of the full
+    order that fits."""
     spec = design.spec
     units = spec.patch.units if units is None else units
+    cap = spec.patch.max_units or machine.max_units
+    tries = list(range(1, cap + 1)) if units == "auto" else [units]
+    if spec.patch.realization == "compensator" and design.controller is not None:
+        return _place_compensator(design, machine, tries)  # plain state feedback has no other form
     real = realize(design, machine)
     _check_law_reaches_pots(real, machine, spec)
-    if units == "auto":
-        for n in range(1, machine.max_units + 1):
-            try:
-                return _place(design, real, machine, n)
-            except ResourceError:
-                if n == machine.max_units:
-                    raise
-    if not 1 <= units <= machine.max_units:
-        raise spec.error("patch.units", f"the {machine.name} profile allows 1 to {machine.max_units} slaved units "
-                         f"(got {units})")
-    return _place(design, real, machine, units)
+    for n in tries:
+        try:
+            return _place(design, real, machine, n)
+        except ResourceError:
+            if n == tries[-1]:
+                raise
+    raise AssertionError("unreachable")
+
+
+def _place_compensator(design: Design, machine: MachineProfile, tries: list[int]) -> Netlist:
+    """The compensator at the spec's order and form on the fewest of ``tries`` units that takes it."""
+    spec = design.spec
+    p = spec.patch
+    full = compensator_fit.laws(design, machine, "truncate")[0][0]
+    if p.order != "full" and p.order > full:
+        raise spec.error("patch.order", f"the minimal compensator has {full} states (got {p.order})")
+    order = full if p.order == "full" else p.order
+    tried = compensator_fit.fits(design, machine, tries, p.form, p.reduction, [order])
+    chosen = compensator_fit.best(tried)
+    if chosen is None:
+        raise ResourceError(spec.path, "machine", no_fit_line(tried, machine, tries[-1]))
+    net = chosen.netlist
+    notes = list(net.notes) + [f"realisation compared: {f.line()}" for f in tried]
+    net = net.model_copy(update={"description": spec.description, "notes": notes})
+    return net.model_copy(update={"parts": parts_for(net, machine)})
+
+
+def no_fit_line(tried: list, machine: MachineProfile, cap: int) -> str:
+    """One line: the smallest realisation found and what it needs."""
+    short = [f for f in tried if f.error is not None and "unstable" not in f.error]
+    if not short:
+        placed = [f for f in tried if f.netlist is not None]
+        if placed:
+            f = min(placed, key=lambda f: f.peak_fraction)
+            return (f"no realisation keeps every amplifier within the reference and the loop stable as dialled; "
+                    f"the nearest, order {f.order} in {f.form} form, reaches {f.peak_fraction:.2f} of the reference")
+        return "no realisation of the compensator at this order keeps the loop stable"
+    f = short[0]
+    return (f"no realisation fits {cap} unit(s) of the {machine.name}; the smallest tried, order {f.order} "
+            f"({f.method}) in {f.form} form: {f.error}")
 
 
 def _check_law_reaches_pots(real, machine: MachineProfile, spec) -> None:

@@ -49,6 +49,7 @@ from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.studies import robust
 from patchgen.studies.bench_corners import BenchStudy, study
+from patchgen.studies.compensator_candidates import compensator_specs
 from patchgen.studies.ranking import DECISIONS, ROUND_RUNS, TARGET, ScenarioOutcome, decision, outcome, weakest
 
 CANDIDATES = (
@@ -200,8 +201,9 @@ class Recommendation:
 
 
 def candidate_specs(spec: DesignSpec, bench: BenchProfile) -> list[tuple[str, str, DesignSpec]]:
-    """The spec with each estimator kind (plant, weights, integrators unchanged); then, when the
-    spec's actuator model is not the bench's, each again with the bench's actuator."""
+    """The spec with each estimator kind (plant, weights, integrators unchanged), each wired as its
+    states; then, when the spec's actuator model is not the bench's, each again with the bench's
+    actuator."""
     actuators = [("", spec.actuator)]
     b = bench.actuator
     mine = spec.actuator
@@ -218,7 +220,10 @@ def candidate_specs(spec: DesignSpec, bench: BenchProfile) -> list[tuple[str, st
             if kind != e.kind or suffix:
                 upd.update(rolloff_s=None, observer_pole=None)
             est = e.model_copy(update=upd)
-            out.append((label + suffix, kind, spec.model_copy(update={"estimator": est, "actuator": act})))
+            # wired as its states: the compensator as one system is compensator_specs' candidate
+            patch = spec.patch.model_copy(update={"realization": "states", "order": "full"})
+            out.append((label + suffix, kind, spec.model_copy(update={"estimator": est, "actuator": act,
+                                                                       "patch": patch})))
     return out
 
 
@@ -238,7 +243,9 @@ def prepare(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile) -> l
     list of Candidate
         In candidate_specs order; one that does not design or fit keeps its one-line error.
     """
-    return [allocate(label, kind, sp, machine, bench) for label, kind, sp in candidate_specs(spec, bench)]
+    specs = candidate_specs(spec, bench)
+    specs += compensator_specs(specs, machine, bench)
+    return [allocate(label, kind, sp, machine, bench) for label, kind, sp in specs]
 
 
 def allocate(label: str, kind: str, sp: DesignSpec, machine: MachineProfile, bench: BenchProfile) -> Candidate:

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from patchgen.cli.design import design_from_path
 from patchgen.design.lqg import design, design_on
-from patchgen.inputs.errors import InputError, ResourceError
+from patchgen.inputs.errors import ResourceError
 from patchgen.inputs.spec import DesignSpec, check_spec
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
@@ -77,12 +77,15 @@ def test_ch5_each_pot_within_half_a_dial_step():
 
 
 @pytest.mark.parametrize("name", ["thesis-case1", "thesis-case1-noint", "thesis-case2", "thesis-case3"])
-def test_kalman_designs_do_not_fit_a_gp6(name):
+def test_kalman_designs_as_estimator_states_do_not_fit_a_gp6(name):
     d, m = design_from_path(design_path(name))
+    states = d.spec.model_copy(update={"patch": d.spec.patch.model_copy(update={"realization": "states", "units": 1})})
     with pytest.raises(ResourceError) as exc:
-        build_patch(d, m)
+        build_patch(design_on(states, m, None), m)
     line = exc.value.line()
     assert "needs" in line and "has 8 amplifiers (4 integrators) and 8 pots" in line
+    if d.spec.patch.realization == "compensator":  # as one system they patch on three units
+        assert build_patch(d, m).units == 3
 
 
 @st.composite
@@ -184,8 +187,9 @@ def test_two_slaved_units_when_one_is_not_enough():
     check_roundtrip(d, net, m.pot_resolution)
 
 
-def test_units_beyond_the_profile_are_refused():
+def test_units_beyond_the_profiles_default_are_the_users():
     d, m = design_from_path(design_path("thesis-ch5"))
-    with pytest.raises(InputError) as exc:
-        build_patch(d, m, 3)
-    assert "patch.units" in exc.value.line() and "1 to 2" in exc.value.line()
+    assert m.max_units == 2
+    net = build_patch(d, m, 3)
+    assert net.units == 3 and all(a.id.startswith(("U1.", "U2.", "U3.")) for a in net.amplifiers)
+    check_roundtrip(d, net, m.pot_resolution)

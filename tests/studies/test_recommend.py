@@ -111,7 +111,8 @@ def test_ranking_is_deterministic_and_reports_progress():
     # candidates that do not fit come last, with their resource error
     sim = [x.simulated for x in a.ranked]
     assert sim == sorted(sim, reverse=True)
-    assert all(x.error and "pots" in x.error for x in a.ranked if not x.simulated)
+    assert all(x.error and ("pots" in x.error or "as one system" in x.label) for x in a.ranked if not x.simulated)
+    assert all(len(x.error.splitlines()) == 1 for x in a.ranked if not x.simulated)
 
 
 def _outcomes(*held_of_runs):

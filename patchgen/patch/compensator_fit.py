@@ -1,0 +1,224 @@
+"""Which realisation of a compensator fits the machine: every order and form placed and compared.
+
+For a design with a compensator (patchgen.design.compensator), the minimal law with the modes
+faster than the machine's inputs reach residualised, then every lower order (balanced truncation
+and balanced singular perturbation, the integral part kept), each in every form of
+patchgen.patch.compensator_forms, is placed on 1, 2, ... slaved units. A realisation is compared by
+units, pots and amplifiers, its coefficient range, the amplitude its states reach, and the loop's
+margins on the design model with the pots as dialled (the netlist read back), its sensitivity to
+the dial.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from patchgen.design import compensator as comp
+from patchgen.design.controller import Controller
+from patchgen.design.lqg import Design, loop_with_controller
+from patchgen.design.margins import Margins, loop_margins
+from patchgen.inputs.errors import InputError, ResourceError
+from patchgen.patch import large_gains
+from patchgen.patch.allocation import allocate
+from patchgen.patch.compensator_forms import (
+    AMPLITUDE,
+    FORMS,
+    coefficient_range,
+    excursion_peaks,
+    realize_compensator,
+    scaling_plants,
+)
+from patchgen.patch.netlist import Netlist
+from patchgen.patch.readback import wired_law
+from patchgen.profiles.machine import MachineProfile
+
+METHODS = ("truncate", "residualise")
+SHRINK_ROUNDS = 4  # placements of one law and form while scaling down the states that overload
+
+
+@dataclass(frozen=True)
+class Fit:
+    """One realisation tried: the law, its form, and where it landed (or why it did not)."""
+
+    order: int
+    method: str  # minimal, truncate or residualise
+    form: str
+    law: comp.Compensator
+    design_margins: Margins = field(compare=False)
+    netlist: Netlist | None = None
+    error: str | None = None
+    coefficients: tuple[float, float] = (0.0, 0.0)  # smallest and largest magnitude
+    peak_fraction: float = 0.0  # the largest amplifier's peak over the scaling excursions / reference
+    dialled_margins: Margins | None = field(default=None, compare=False)
+
+    @property
+    def units(self) -> int | None:
+        """Slaved units the patch needs (None when it does not fit)."""
+        return None if self.netlist is None else self.netlist.units
+
+    @property
+    def pots(self) -> int | None:
+        """Pots the patch uses."""
+        return None if self.netlist is None else len(self.netlist.pots)
+
+    @property
+    def amplifiers(self) -> int | None:
+        """Amplifiers the patch uses."""
+        return None if self.netlist is None else len(self.netlist.amplifiers)
+
+    @property
+    def holds_dialled(self) -> bool:
+        """The loop on the design model is stable with the pots as dialled."""
+        return self.dialled_margins is not None and self.dialled_margins.stable
+
+    def key(self) -> tuple:
+        """Cheapest first: units, pots, amplifiers, then the dialled loop's phase margin (larger first)."""
+        pm = self.dialled_margins.pm_deg if self.holds_dialled and self.dialled_margins.pm_deg else 0.0
+        return (self.units, self.pots, self.amplifiers, -round(pm, 1), FORMS.index(self.form))
+
+    def line(self) -> str:
+        """One line for the table."""
+        head = f"order {self.order} ({self.method}), {self.form}"
+        if self.netlist is None:
+            return f"{head}: {self.error}"
+        m = self.dialled_margins
+        marg = (f"dialled loop GM {_db(m.lower_gm_db)}/{_db(m.upper_gm_db)} dB, PM {m.pm_deg:.1f} deg"
+                if m is not None and m.stable and m.pm_deg is not None else "dialled loop unstable")
+        return (f"{head}: {self.units} unit(s), {self.amplifiers} amplifiers, {self.pots} pots, coefficients "
+                f"{self.coefficients[0]:.3g}..{self.coefficients[1]:.3g}, largest amplifier "
+                f"{self.peak_fraction:.2f} of the reference, {marg}")
+
+
+def _db(x: float | None) -> str:
+    return "inf" if x is None else f"{x:.1f}"
+
+
+def laws(design: Design, machine: MachineProfile, method: str = "auto") -> list[tuple[int, str, comp.Compensator]]:
+    """The minimal law (modes faster than a gain stage into a full-weight input reaches, the top
+    gain squared, residualised) and each
+    lower order down to the integral part alone: (order, method, law), highest order first."""
+    fastest = large_gains.top_gain(machine) ** 2 / machine.time_scale_s
+    full = comp.without_fast_modes(comp.compensator(design), fastest)
+    out = [(full.order, "minimal", full)]
+    methods = METHODS if method == "auto" else (method,)
+    low = (0 if full.R is None else 1) + full.unstable
+    for order in range(full.order - 1, max(low, 1) - 1, -1):
+        for m in methods:
+            out.append((order, m, comp.reduced(full, order, m)))
+    return out
+
+
+def dialled_margins(design: Design, net: Netlist) -> Margins:
+    """The loop's margins on the design model with the law read back from the netlist (pots as dialled)."""
+    law = wired_law(net)
+    vpu = {s.id: s.volts_per_unit for s in net.sensors}
+    ks = np.diag([vpu[s] for s in law.inputs])
+    KU = net.output.K_U_N_per_V
+    ctl = Controller(law.states, law.Ac, law.Bc @ ks, KU * law.Cc, KU * law.Dc @ ks)
+    A, B, C = loop_with_controller(design.model, ctl)
+    return loop_margins(A, B, C)
+
+
+def amplifier_peaks(design: Design, net: Netlist) -> dict[str, float]:
+    """Each amplifier's largest |output| (V) over the scaling excursions: the wired law closing each
+    scaling plant (patchgen.patch.compensator_forms.scaling_plants)."""
+    vpu = {s.id: s.volts_per_unit for s in net.sensors}
+    law = wired_law(net)
+    ks = np.diag([vpu[s] for s in law.inputs])
+    KU = net.output.K_U_N_per_V
+    outs = {a.id: wired_law(net, a.id) for a in net.amplifiers}
+    peak = {a: 0.0 for a in outs}
+    for Ap, Bp, Cp, names in scaling_plants(design):
+        Acl = np.block([[Ap + Bp @ (KU * law.Dc) @ ks @ Cp, Bp @ (KU * law.Cc)], [law.Bc @ ks @ Cp, law.Ac]])
+        rows = np.vstack([np.hstack([la.Dc @ ks @ Cp, la.Cc]) for la in outs.values()])
+        p = excursion_peaks(Acl, rows, [names.index(s) for s in ("theta", "s")])
+        peak = {a: max(peak[a], float(v)) for a, v in zip(outs, p)}
+    return peak
+
+
+def _block_of(quantity: str) -> str:
+    """The compensator block an amplifier serves: its own, its partial sum's or its gain stage's."""
+    q = quantity.removeprefix("partial ")
+    return q.split(f"_{large_gains.PREFIX}")[0]
+
+
+def try_fit(design: Design, order: int, method: str, law: comp.Compensator, form: str, machine: MachineProfile,
+            units: list[int]) -> Fit:
+    """Place one law in one form on the fewest of ``units`` slaved units that takes it; a state whose
+    amplifiers (its own, its partial sum, its gain stage) pass AMPLITUDE of the reference over the
+    scaling excursions is scaled down and placed again (SHRINK_ROUNDS at most)."""
+    dm = comp.margins(design, law)
+    if not dm.stable:
+        return Fit(order, method, form, law, dm, error="the loop with this law is unstable on the design model")
+    shrink: dict[str, float] = {}
+    err = None
+    for _ in range(SHRINK_ROUNDS):
+        real = realize_compensator(design, law, form, machine, shrink)
+        rng = coefficient_range(real, machine.pot_resolution)
+        net = None
+        for n in units:
+            try:
+                net = allocate(real, machine.slaved(n), design.spec.path)
+            except (ResourceError, InputError) as exc:
+                err = exc.message
+                continue
+            net = net.model_copy(update={"units": n, "machine_name": machine.name})
+            break
+        if net is None:
+            return Fit(order, method, form, law, dm, error=err, coefficients=rng)
+        peaks = amplifier_peaks(design, net)
+        limit = AMPLITUDE * machine.reference_V
+        over = {}
+        for a in net.amplifiers:
+            b = _block_of(a.carries.quantity)
+            if peaks[a.id] > limit and b != "u_c":
+                over[b] = min(over.get(b, 1.0), limit / peaks[a.id])
+        if not over:
+            break
+        for b, f in over.items():
+            shrink[b] = shrink.get(b, 1.0) * f
+    peak = max(peaks.values()) / machine.reference_V
+    return Fit(order, method, form, law, dm, net, None, rng, peak, dialled_margins(design, net))
+
+
+def fits(design: Design, machine: MachineProfile, units: list[int], form: str = "auto",
+         method: str = "auto", orders: list[int] | None = None) -> list[Fit]:
+    """Every law and form tried on ``units`` (in the order given), highest order first.
+
+    Parameters
+    ----------
+    design : Design
+        A design with a compensator.
+    machine : MachineProfile
+        One unit of the machine.
+    units : list of int
+        Slaved-unit counts to try, fewest first.
+    form, method : str
+        A form of FORMS and a reduction of METHODS, or "auto" for every one.
+    orders : list of int, optional
+        Only these orders (default: every order).
+
+    Returns
+    -------
+    list of Fit
+        In the order of :func:`laws`, each form within.
+    """
+    forms = FORMS if form == "auto" else (form,)
+    out = []
+    for order, m, law in laws(design, machine, method):
+        if orders is not None and order not in orders:
+            continue
+        out += [try_fit(design, order, m, law, f, machine, units) for f in forms]
+    return out
+
+
+def best(candidates: list[Fit]) -> Fit | None:
+    """The cheapest realisation of the highest order that fits with a stable dialled loop and no
+    amplifier past the reference over the scaling excursions."""
+    ok = [f for f in candidates if f.netlist is not None and f.holds_dialled and f.peak_fraction <= 1.0]
+    if not ok:
+        return None
+    top = max(f.order for f in ok)
+    return min((f for f in ok if f.order == top), key=Fit.key)

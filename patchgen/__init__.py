@@ -11,7 +11,15 @@ The Python API (docs/api.md) is loaded on first use, so ``import patchgen`` stay
   a frequency grid.
 """
 
+import os as _os
+
 __version__ = "0.2.0"
+
+# numba's compiled kernels go to a per-user cache, not beside the installed sources: files pip did
+# not install outlive `pip uninstall` and leave site-packages/patchgen a namespace package that
+# shadows a later (editable) install. Set before numba is first imported; a user's setting wins.
+_os.environ.setdefault("NUMBA_CACHE_DIR", _os.path.join(
+    _os.environ.get("XDG_CACHE_HOME") or _os.path.join(_os.path.expanduser("~"), ".cache"), "patchgen", "numba"))
 
 _LAZY = {
     "load_design": "patchgen.design.lti",

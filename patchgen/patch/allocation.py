@@ -59,7 +59,7 @@ def _plan_terms(real: Realization, machine: MachineProfile):
     """Apply the pot-resolution policy; returns kept terms per block and notes."""
     res, reading = machine.pot_resolution, machine.procedure.pot_reading
     notes: list[str] = []
-    too_big: list[str] = []
+    too_big: list[tuple[float, str]] = []  # (magnitude, what to say), the largest said first
     kept: dict[str, list[Term]] = {}
     for b in real.blocks:
         kept[b.name] = []
@@ -74,8 +74,9 @@ def _plan_terms(real: Realization, machine: MachineProfile):
                 continue
             top = max(machine.input_weights)
             if mag > top * machine.pot_max + 1e-12:
-                too_big.append(f"coefficient {t.coeff:.4g} of {t.signal} into {b.name} exceeds {top:g}, the most "
-                               f"one x{top} input gives")
+                # .5g: a coefficient just over the top must not print as the top itself
+                too_big.append((mag, f"coefficient {t.coeff:.5g} of {t.signal} into {b.name} exceeds {top:g}, the "
+                                     f"most one x{top} input gives"))
             if mag < res / 2 or (mag < res and real.below_resolution != "round"):
                 if real.below_resolution == "minimum":
                     notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the {reading} "
@@ -158,7 +159,8 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
     A coefficient above the largest input weight is split across inputs, else carried by a gain
     stage (patchgen.patch.large_gains); only when neither fits is it the error.
     """
-    blocks, kept, notes, too_big = _plan_terms(real, machine)
+    blocks, kept, notes, over = _plan_terms(real, machine)
+    too_big = [said for _, said in sorted(over, key=lambda o: -o[0])]
     if not too_big:
         return _place(real, blocks, kept, notes, machine, source)
     big = [t for ts in kept.values() for t in ts if large_gains.too_big(t, machine)]

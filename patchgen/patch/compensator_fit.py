@@ -25,6 +25,7 @@ from patchgen.patch.allocation import allocate
 from patchgen.patch.compensator_forms import (
     AMPLITUDE,
     FORMS,
+    STAGE_SUFFIX,
     coefficient_range,
     excursion_peaks,
     realize_compensator,
@@ -52,6 +53,7 @@ class Fit:
     coefficients: tuple[float, float] = (0.0, 0.0)  # smallest and largest magnitude
     peak_fraction: float = 0.0  # the largest amplifier's peak over the scaling excursions / reference
     dialled_margins: Margins | None = field(default=None, compare=False)
+    staged: bool = False  # blocks with coefficients above one input summed at 1/g first (compensator_forms)
 
     @property
     def units(self) -> int | None:
@@ -80,7 +82,7 @@ class Fit:
 
     def line(self) -> str:
         """One line for the table."""
-        head = f"order {self.order} ({self.method}), {self.form}"
+        head = f"order {self.order} ({self.method}), {self.form}" + (", staged sums" if self.staged else "")
         if self.netlist is None:
             return f"{head}: {self.error}"
         m = self.dialled_margins
@@ -141,21 +143,37 @@ def amplifier_peaks(design: Design, net: Netlist) -> dict[str, float]:
 def _block_of(quantity: str) -> str:
     """The compensator block an amplifier serves: its own, its partial sum's or its gain stage's."""
     q = quantity.removeprefix("partial ")
-    return q.split(f"_{large_gains.PREFIX}")[0]
+    return q.split(f"_{large_gains.PREFIX}")[0].removesuffix(STAGE_SUFFIX)
 
 
 def try_fit(design: Design, order: int, method: str, law: comp.Compensator, form: str, machine: MachineProfile,
             units: list[int]) -> Fit:
     """Place one law in one form on the fewest of ``units`` slaved units that takes it; a state whose
     amplifiers (its own, its partial sum, its gain stage) pass AMPLITUDE of the reference over the
-    scaling excursions is scaled down and placed again (SHRINK_ROUNDS at most)."""
+    scaling excursions is scaled down and placed again (SHRINK_ROUNDS at most). When no count of
+    units takes it, or an amplifier still passes the reference (a partial sum of u_c, say, whose
+    terms cancel only in u_c), the blocks with coefficients above one input's reach are staged
+    (patchgen.patch.compensator_forms.staged_blocks) and placed again; the staged patch is taken
+    when it fits within the reference, or comes nearer to it."""
     dm = comp.margins(design, law)
     if not dm.stable:
         return Fit(order, method, form, law, dm, error="the loop with this law is unstable on the design model")
+    plain = _place_scaled(design, order, method, law, form, machine, units, dm, staged=False)
+    if plain.netlist is not None and plain.peak_fraction <= 1.0:
+        return plain
+    again = _place_scaled(design, order, method, law, form, machine, units, dm, staged=True)
+    if again.netlist is None or (plain.netlist is not None and again.peak_fraction >= plain.peak_fraction):
+        return plain
+    return again
+
+
+def _place_scaled(design: Design, order: int, method: str, law: comp.Compensator, form: str,
+                  machine: MachineProfile, units: list[int], dm: Margins, staged: bool) -> Fit:
+    """:func:`try_fit` for one choice of staging."""
     shrink: dict[str, float] = {}
     err = None
     for _ in range(SHRINK_ROUNDS):
-        real = realize_compensator(design, law, form, machine, shrink)
+        real = realize_compensator(design, law, form, machine, shrink, staged)
         rng = coefficient_range(real, machine.pot_resolution)
         net = None
         for n in units:
@@ -167,7 +185,7 @@ def try_fit(design: Design, order: int, method: str, law: comp.Compensator, form
             net = net.model_copy(update={"units": n, "machine_name": machine.name})
             break
         if net is None:
-            return Fit(order, method, form, law, dm, error=err, coefficients=rng)
+            return Fit(order, method, form, law, dm, error=err, coefficients=rng, staged=staged)
         peaks = amplifier_peaks(design, net)
         limit = AMPLITUDE * machine.reference_V
         over = {}
@@ -180,7 +198,7 @@ def try_fit(design: Design, order: int, method: str, law: comp.Compensator, form
         for b, f in over.items():
             shrink[b] = shrink.get(b, 1.0) * f
     peak = max(peaks.values()) / machine.reference_V
-    return Fit(order, method, form, law, dm, net, None, rng, peak, dialled_margins(design, net))
+    return Fit(order, method, form, law, dm, net, None, rng, peak, dialled_margins(design, net), staged)
 
 
 def fits(design: Design, machine: MachineProfile, units: list[int], form: str = "auto",

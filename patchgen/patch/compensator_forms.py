@@ -43,6 +43,7 @@ SCALING_THETA0_RAD = math.radians(10.0)  # offset-10deg, the shipped scenario wi
 SCALING_S0_M = 0.2  # step-cart's 0.2 m step, as an initial cart offset
 SCALING_HORIZON_S = 10.0  # long enough for every scenario's transient to settle (shipped sims: 10 s)
 SCALING_STEP_S = 0.005
+STAGE_SUFFIX = "_in"  # a staged block's summer (staged_blocks)
 ROUNDING = 1e-9  # relative: a form's entry this small beside its matrix's largest is a transformation's noise
 
 
@@ -185,7 +186,7 @@ def _scale(peak: float, reference: float, into: list[float], outof: list[float],
 
 
 def realize_compensator(design: Design, c: Compensator, form: str, machine: MachineProfile,
-                        shrink: dict[str, float] | None = None) -> Realization:
+                        shrink: dict[str, float] | None = None, staged: bool = False) -> Realization:
     """The compensator in ``form`` as integrate blocks and the u_c summer, in machine volts.
 
     Parameters
@@ -201,6 +202,9 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
     shrink : dict, optional
         A factor (below 1) on a state's voltage, by block name: for a state whose partial sum or
         gain stage would leave the reference (patchgen.patch.compensator_fit).
+    staged : bool
+        Each block with a coefficient above what one input carries sums its terms at 1/g on a
+        summer of its own, taken back at g (:func:`staged_blocks`).
 
     Returns
     -------
@@ -251,10 +255,41 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
     uterms += [Term(nm, coeff(fs.C[0, i] / (sig[nm] * KU))) for i, nm in enumerate(names) if fs.C[0, i]]
     uterms += [Term(m, coeff(c.D[0, k] / (ks[m] * KU))) for k, m in enumerate(y) if c.D[0, k]]
     blocks.append(Block("u_c", "sum", tuple(uterms), 1.0, "V", "control voltage to the servo amplifier"))
+    if staged:
+        blocks = staged_blocks(blocks, max(weights) * machine.pot_max, machine.pot_resolution)
     notes = (f"compensator realised as one system: {c.method}, {c.order} states, {form} form; each state "
              f"scaled to at most {AMPLITUDE:g} of the reference over a {math.degrees(SCALING_THETA0_RAD):g} deg "
              f"release and a {SCALING_S0_M:g} m cart offset",)
     return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, notes)
+
+
+def staged_blocks(blocks: list[Block], top: float, resolution: float) -> list[Block]:
+    """Each block with a coefficient above ``top`` (but within top squared) split in two: a summer
+    ``<name>_in`` of its terms at 1/g, and the block itself taking that summer at g = largest / top.
+    A term that 1/g would put below the dial's ``resolution`` stays on the block itself, at its
+    own coefficient (it would otherwise be left out).
+
+    A fast compensator mode needs its own rate and its couplings above one input's reach; a gain
+    stage per signal (patchgen.patch.large_gains) costs an amplifier per signal, this costs one per
+    block. The summer carries the block's input (for an integrator, its rate of change) over g:
+    the amplitude check after placing (patchgen.patch.compensator_fit) sees it like any amplifier.
+    """
+    out: list[Block] = []
+    for b in blocks:
+        big = max((abs(t.coeff) for t in b.terms), default=0.0)
+        if big <= top * (1 + 1e-12) or big > top * top:
+            out.append(b)
+            continue
+        g = big / top
+        per = "/s" if b.kind == "integrate" else ""
+        fine = tuple(t for t in b.terms if abs(t.coeff) / g < resolution)
+        out.append(Block(f"{b.name}{STAGE_SUFFIX}", "sum",
+                         tuple(Term(t.signal, t.coeff / g) for t in b.terms if t not in fine),
+                         b.volts_per_unit / g, f"{b.unit}{per}",
+                         f"the input of {b.name} over {g:.4g}: its coefficients above {top:g} summed here"))
+        out.append(Block(b.name, b.kind, (Term(f"{b.name}{STAGE_SUFFIX}", g),) + fine, b.volts_per_unit, b.unit,
+                         b.purpose))
+    return out
 
 
 def coefficient_range(real: Realization, resolution: float) -> tuple[float, float]:

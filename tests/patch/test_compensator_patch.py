@@ -16,6 +16,7 @@ from patchgen.profiles.machine import load_machine
 
 W = np.logspace(-1, 2, 61)  # rad/s, the band the wiring must match
 CASES = ("thesis-case1", "thesis-case2", "thesis-case3")
+PATCHED = CASES + ("bench-lqg",)  # bench-lqg's fast mode and u_c are staged sums
 
 
 def _ss_freqresp(sys, w):
@@ -60,7 +61,7 @@ def _dial_tolerance(net, w):
     return tol
 
 
-@pytest.fixture(scope="module", params=CASES)
+@pytest.fixture(scope="module", params=PATCHED)
 def patched(request):
     d = load_design(request.param)
     m = load_machine(d.spec.machine)
@@ -113,3 +114,28 @@ def test_units_are_the_specs_choice():
     with pytest.raises(InputError) as exc:
         build_patch(load_design(small), m)
     assert "no realisation fits 2 unit(s)" in exc.value.line()
+
+
+def test_bench_lqg_stages_its_fast_mode_and_holds_on_the_bench():
+    """bench-lqg: its -22.8 rad/s mode and u_c need more than one x10 input, so each sums its terms
+    at 1/g on a summer of its own (staged sums); on 3 units it holds every run of 40 per shipped
+    scenario on the uw-1991 bench (dead zone, lag, noise, drift, random forces), where the loop
+    transfer recovery design it replaces (W = 1, V = I, Gamma = B) held none."""
+    from patchgen.bench.simulate import simulate
+    from patchgen.design.model import plant_params
+    from patchgen.inputs.resources import shipped, shipped_file
+    from patchgen.inputs.scenario import load_scenario
+    from patchgen.profiles.bench import load_bench
+
+    d = load_design("bench-lqg")
+    m = load_machine(d.spec.machine)
+    net = build_patch(d, m)
+    assert net.units == 3
+    staged = [a for a in net.amplifiers if a.carries.quantity.removeprefix("partial ").endswith("_in")]
+    assert {a.carries.quantity for a in staged} >= {"u_c_in"}
+    assert d.lqg_margins.stable and d.lqg_margins.lower_gm < 0.42  # deep enough for the dead zone
+    bench = load_bench(d.spec.bench)
+    for name in shipped("scenario"):
+        sc = load_scenario(shipped_file("scenario", name))
+        r = simulate(net, plant_params(d.spec), bench, m, sc, runs=40, keep_history=False)
+        assert r.distribution.fraction_held == 1.0, name

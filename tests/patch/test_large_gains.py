@@ -68,6 +68,29 @@ def test_a_machine_without_room_gives_the_one_line_error():
     assert "exceeds 10" in line and "neither a second input nor a gain stage fits" in line and "\n" not in line
 
 
+def test_the_refusal_names_the_largest_coefficient_unambiguously():
+    """Several coefficients beyond one input: the line names the largest, printed to enough
+    digits that one just over the top never reads as the top itself (10.001 is not "10")."""
+    from patchgen.patch.allocation import allocate
+    from patchgen.patch.realization import Block, Realization, Term
+
+    blocks = (Block("x", "integrate", (Term("x", -10.001), Term("theta", 10.004)), 1.0, "N", "state"),
+              Block("u_c", "sum", (Term("x", 250.0), Term("s", -30.0)), 1.0, "V", "control voltage"))
+    real = Realization("t", {"s": 5.0, "theta": 4.19, "s_dot": 0.5941}, blocks, 14.01, "round")
+    with pytest.raises(ResourceError) as exc:
+        allocate(real, GP6)
+    line = exc.value.line()
+    assert "coefficient 250 of x into u_c exceeds 10" in line and "(4 such coefficients)" in line
+    bigger = Realization("t", real.sensors, blocks[:1] + (Block("u_c", "sum", (Term("x", 1.0),), 1.0, "V", "u"),),
+                         14.01, "round")
+    one_x10 = GP6.model_copy(update={"amplifiers": [a.model_copy(update={"inputs": {"x1": 1, "x10": 1}})
+                                                    for a in GP6.amplifiers]})
+    with pytest.raises(ResourceError) as exc:
+        allocate(bigger, one_x10.model_copy(update={"amplifiers": one_x10.amplifiers[:2]}))
+    assert "coefficient 10.004 of theta into x exceeds 10" in exc.value.line()
+    assert "(2 such coefficients), and neither a second input nor a gain stage fits" in exc.value.line()
+
+
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(diff_specs())
 def test_no_random_design_is_refused_for_a_large_gain_alone(spec):

@@ -117,7 +117,7 @@ def test_units_are_the_specs_choice():
 
 
 def test_bench_lqg_stages_its_fast_mode_and_holds_on_the_bench():
-    """bench-lqg: its -22.8 rad/s mode and u_c need more than one x10 input, so each sums its terms
+    """bench-lqg: its -25.7 rad/s mode and u_c need more than one x10 input, so each sums its terms
     at 1/g on a summer of its own (staged sums); on 3 units it holds every run of 40 per shipped
     scenario on the uw-1991 bench (dead zone, lag, noise, drift, random forces), where the loop
     transfer recovery design it replaces (W = 1, V = I, Gamma = B) held none."""

@@ -48,7 +48,6 @@ METER_RESOLUTION_V = 0.001  # the reading's last digit (the GP-6's DVM; THE ANAL
 FULL_SCALE = 0.8  # the largest expected reading as a fraction of the reference
 IC_TEST_V = (5.0, -3.0, 4.0, -2.0, 3.0, -4.0, 2.0, -5.0)  # integrator test values, distinct so signs show
 SUMMER_ROLES = ("summer", "inverter", "lag")  # a lag is a summer at DC
-UNBOUNDED_V = 1e12  # a rail no reading reaches: only for the least-squares fallback of a singular moved wiring
 
 
 @dataclass(frozen=True)
@@ -247,7 +246,7 @@ def _reading(net: Netlist, wires: list[Wire], machine: MachineProfile, cond: Con
         err = (w.weight * res / 2 if w.pot else 0.0) + INTERNAL_TOLERANCE * abs(w.gain)
         moved = list(wires)
         moved[k] = Wire(w.amplifier, w.source, w.gain + err, w.pot, w.jack, w.weight)
-        squares += (solve(net, moved, cond, rail=UNBOUNDED_V)[amp] - expect) ** 2
+        squares += (solve(net, moved, cond)[amp] - expect) ** 2
     # independent errors add in quadrature (three times the root sum of squares covers their sum's
     # spread when each is a uniform error of that half-width: its standard deviation is 1/sqrt(3))
     tol = METER_RESOLUTION_V + math.sqrt(3.0 * squares)

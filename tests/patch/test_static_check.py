@@ -150,3 +150,27 @@ def test_one_fault_is_named_first(name):
             if not ok:
                 misses.append((kind, w, [f.description for f in v.faults[:2]]))
     assert not misses, misses
+
+
+def test_a_flip_that_leaves_no_steady_output_counts_as_caught():
+    """bench-lqg's -1 rad/s mode feeds its integrator back on itself at exactly 1 (pot 0.1 on a
+    x10 input): patched as a summer, that input with its sign flipped makes the loop singular (no
+    steady output). The check still completes, and the reading of that amplifier names the pot."""
+    from patchgen.patch.static_check import Wire, solve
+
+    net, machine = _patch("bench-lqg", "gp6")
+    check = static_check(net, machine)
+    wires = wires_of(net)
+    singular = []
+    for cond in check.conditions:
+        for k, w in enumerate(wires):
+            flipped = list(wires)
+            flipped[k] = Wire(w.amplifier, w.source, -w.gain, w.pot, w.jack, w.weight)
+            try:
+                solve(net, flipped, cond)
+            except np.linalg.LinAlgError:
+                singular.append((cond.name, w))
+    assert singular, "bench-lqg no longer has a unit self-loop: pick a patch that does"
+    for cname, w in singular:
+        reading = next(r for r in check.readings if r.condition == cname and r.point == w.amplifier)
+        assert w.pot in reading.isolates

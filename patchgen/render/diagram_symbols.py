@@ -30,6 +30,7 @@ NAME_PT = 9.0           # terminal names
 ID_PT = 7.5             # amplifier ids
 SIGNAL_PT = 7.0         # what an amplifier carries, pot settings
 SMALL_PT = 7.0          # weights, pot ids, details, IC, part labels
+SMALLEST_PT = min(NAME_PT, ID_PT, SIGNAL_PT, SMALL_PT)
 
 # Geometry in drawing units.
 PIN_PITCH = 0.72        # vertical distance between two inputs of one amplifier

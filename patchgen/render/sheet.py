@@ -9,6 +9,7 @@ the netlist and the design summary, so the same inputs give the same bytes.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 import jinja2
@@ -18,7 +19,17 @@ from patchgen.patch.parts import fmt_value
 from patchgen.patch.reading import read
 from patchgen.patch.realization import STATE_UNITS
 from patchgen.profiles.machine import Procedure
-from patchgen.render.diagram_symbols import dial_decimals, quantity_label, signed_label
+from patchgen.render.diagram_symbols import SMALLEST_PT, dial_decimals, quantity_label, signed_label
+
+SHEET_WIDTH_MM = 186.0  # the printed content's width: A4 and Letter's common 210 mm less 12 mm margins
+# The room the diagram gets on two printed pages, by the number of extra sections (bench
+# prediction, why this patch): a diagram taller than this at full width is shrunk to fit it ...
+DIAGRAM_ROOM_MM = {0: 96.0, 1: 96.0, 2: 68.0}
+DIAGRAM_ROOM_MM_MORE = 46.0
+# ... but never below the scale that prints its smallest text at this size: a diagram that needs
+# more room takes it (the sheet runs longer) rather than print labels nobody can read.
+PRINTED_MIN_PT = 6.0
+MM_PER_PT = 25.4 / 72.0
 
 
 @dataclass(frozen=True)
@@ -69,7 +80,7 @@ def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[
     ctx = sheet_context(netlist, summary, procedure)
     figures = [("", svg)] if isinstance(svg, str) else svg
     html = _env(autoescape=True).get_template("patch-sheet.html.j2").render(
-        **ctx, figures=[(caption, _inline_svg(body)) for caption, body in figures])
+        **ctx, figures=[(caption, _inline_svg(body, ctx["diagram_mm"])) for caption, body in figures])
     md = _env(autoescape=False).get_template("patch-sheet.md.j2").render(**ctx)
     return _end(html), _end(md)
 
@@ -137,8 +148,9 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
     margins = [{"loop": loop, "figures": [(name, _fmt(v)) for name, v in figs.items()]}
                for loop, figs in summary.margins.items()]
 
-    # the diagram gets the room the extra sections leave on two printed pages
-    diagram_mm = {0: 96, 1: 96, 2: 68}.get(len(summary.sections), 46)
+    # the diagram gets the room the extra sections leave on two printed pages (a third when it
+    # needs more to print its labels at PRINTED_MIN_PT: diagram_height_mm)
+    diagram_mm = DIAGRAM_ROOM_MM.get(len(summary.sections), DIAGRAM_ROOM_MM_MORE)
     return {
         "banners": [sec.banner for sec in summary.sections if sec.banner],
         "parts": parts,
@@ -232,12 +244,26 @@ def _fmt(v: float | str) -> str:
     return v if isinstance(v, str) else _minus(f"{v:.4g}")
 
 
-def _inline_svg(svg: str) -> str:
-    """The SVG without an XML declaration, scaled to the sheet's width."""
+def diagram_height_mm(svg: str, room_mm: float) -> float:
+    """The most a diagram may take in height on the sheet: the room, or more when shrinking it into
+    the room would print its smallest text below PRINTED_MIN_PT (its size read from the SVG's own
+    width and height, in pt)."""
+    size = {k: float(v) for k, v in re.findall(r'\b(width|height)="([0-9.eE+-]+)pt"', svg.split(">", 1)[0])}
+    if set(size) != {"width", "height"}:
+        raise ValueError("the wiring SVG must give its width and height in pt")
+    scale = PRINTED_MIN_PT / SMALLEST_PT  # the least the diagram may be shrunk
+    return max(room_mm, math.ceil(size["height"] * scale * MM_PER_PT))
+
+
+def _inline_svg(svg: str, room_mm: float) -> str:
+    """The SVG without an XML declaration, scaled to the sheet's width and to at most
+    :func:`diagram_height_mm` in height."""
     body = svg.strip()
     if body.startswith("<?xml"):
         body = body[body.index("?>") + 2:].lstrip()
-    return body.replace("<svg ", '<svg class="wiring" role="img" aria-label="wiring diagram" ', 1)
+    height = diagram_height_mm(body, room_mm)
+    return body.replace("<svg ", f'<svg class="wiring" role="img" aria-label="wiring diagram" '
+                                 f'data-room-mm="{room_mm:g}" style="max-height: {height:g}mm" ', 1)
 
 
 def _env(autoescape: bool) -> jinja2.Environment:

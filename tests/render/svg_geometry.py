@@ -124,9 +124,13 @@ def overlaps(d: Diagram) -> list[str]:
     return found
 
 
-def printed_min_font(d: Diagram) -> float:
-    """The smallest text size, in points, when the diagram is printed at most 186 mm wide."""
-    return min(t.size for t in d.texts) * min(1.0, SHEET_WIDTH_PT / d.width)
+def printed_min_font(d: Diagram, max_height_pt: float | None = None) -> float:
+    """The smallest text size, in points, when the diagram is printed at most 186 mm wide (and, as
+    the sheet inlines it, at most ``max_height_pt`` tall: the browser shrinks it to both)."""
+    scale = min(1.0, SHEET_WIDTH_PT / d.width)
+    if max_height_pt is not None:
+        scale = min(scale, max_height_pt / d.height)
+    return min(t.size for t in d.texts) * scale
 
 
 def connected(d: Diagram, a: tuple[float, float], b: tuple[float, float], region=None) -> bool:

@@ -10,7 +10,7 @@ import pytest
 
 from tests.conftest import ROOT
 
-from .test_sheet import MM, _pdf_pages
+from .test_sheet import MM, _pdf_pages, allowed_pages
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
@@ -36,7 +36,7 @@ def test_written_sheet_fits_two_pages(tmp_path, args):
                        cwd=ROOT)
     assert r.returncode == 0, r.stderr
     pages, boxes = print_pages(out / "patch-sheet.html", tmp_path)
-    assert 1 <= pages <= 2
+    assert 1 <= pages <= allowed_pages((out / "patch-sheet.html").read_text())
     assert all(w <= 210 * MM + 0.5 and h <= 279.4 * MM + 0.5 for w, h in boxes)
     assert "Predicted on the bench" in (out / "patch-sheet.html").read_text()
 
@@ -68,9 +68,36 @@ def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_p
                            capture_output=True, text=True, cwd=ROOT)
         assert r.returncode == 0, r.stderr
         pages, _ = print_pages(out / "patch-sheet.html", tmp_path)
-        assert 1 <= pages <= most, (spec, pages)
+        assert 1 <= pages <= allowed_pages((out / "patch-sheet.html").read_text(), most), (spec, pages)
         html = (out / "patch-sheet.html").read_text()
         assert "Static check" in html and (out / "static-check.csv").stat().st_size > 0
         if most == 3:  # a diagram per unit that holds amplifiers (thesis-ch5's second unit lends only pots)
             units = {a["id"].split(".")[0] for a in json.loads((out / "netlist.json").read_text())["amplifiers"]}
             assert all(f"Unit {u} of 2" in html for u in units) and units
+
+
+@pytest.mark.parametrize("args", [
+    ["patch", "thesis-ch5", "--runs", "4"],
+    ["patch", "bench-recommended", "--runs", "4"],
+    ["patch", "thesis-case1", "--runs", "4"],
+    ["patch", "bench-lqg", "--runs", "4"],
+])
+def test_every_diagram_on_the_sheet_prints_its_smallest_text_at_6pt(tmp_path, args):
+    """The sheet shrinks a diagram to the page's 186 mm and to the height it leaves the diagram
+    (96, 68 or 46 mm, less with more sections): each inlined diagram, at the smaller of both
+    scales, still prints its smallest label at 6 pt or more (before, bench-recommended's and
+    thesis-ch5's printed at 4.7 and 4.9 pt under the 96 mm cap)."""
+    from .svg_geometry import parse, printed_min_font
+
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, "-m", "patchgen", *args, "-o", str(out)], capture_output=True, text=True,
+                       cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+    html = (out / "patch-sheet.html").read_text()
+    svgs = re.findall(r"<svg class=\"wiring\".*?</svg>", html, flags=re.S)
+    assert svgs
+    for svg in svgs:
+        cap = re.search(r'data-room-mm="[0-9.]+" style="max-height: ([0-9.]+)mm"', svg.split(">", 1)[0])
+        assert cap, "an inlined diagram without its height cap would fill the page"
+        d = parse(svg)
+        assert printed_min_font(d, float(cap.group(1)) / 25.4 * 72) >= 6.0 - 1e-9, (args[1], cap.group(1), d.height)

@@ -23,8 +23,6 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from patchgen.identify import actuator, friction, pendulum, sensors
 from patchgen.identify.estimate import Check, Estimate, TestFit, combine, normal, welch
 from patchgen.identify.figures import G_TABLE_B1, Incline, Masses, read_figures
@@ -197,7 +195,9 @@ def _actuator(result: Identification, base: BenchProfile) -> None:
         f.estimates["K_U"] for f in step if "model: lag" in f.notes]
     if gains:
         K = _combined(result, gains, "K_U")
-        tau = _combined(result, _pick(fits, ("actuator_step", "actuator_ramp"), "tau"), "tau")
+        taus = _pick(fits, ("actuator_step", "actuator_ramp"), "tau") if len(models) <= 1 else [
+            f.estimates["tau"] for f in step if "model: lag" in f.notes]  # tau from the same fits as K_U
+        tau = _combined(result, taus, "tau")
         if model == "lag" and tau.value < MIN_LAG_S:
             model = "gain"
         result.bench["actuator.model"] = Parameter(model, "", None, K.source)
@@ -299,12 +299,3 @@ def _plant(result: Identification, mass: Masses | None, mass_src: str) -> None:
     if mass is not None and mass.d_m is not None:
         plant["d"] = Parameter(mass.d_m, "m", None, mass_src)
 
-
-def values(params: dict[str, Parameter]) -> dict[str, float | str]:
-    """Dotted name -> value (for tests and the profile writer)."""
-    return {k: p.value for k, p in params.items()}
-
-
-def finite(x: float) -> bool:
-    """Whether x is a finite number."""
-    return bool(np.isfinite(x))

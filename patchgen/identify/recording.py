@@ -93,11 +93,6 @@ class Recording:
     ignored: tuple[str, ...] = ()
 
     @property
-    def kind(self) -> TestKind:
-        """The test's definition."""
-        return TESTS[self.test]
-
-    @property
     def dt(self) -> float:
         """The sample interval (s): the median step of ``t_s``."""
         return float(np.median(np.diff(self.columns["t_s"])))

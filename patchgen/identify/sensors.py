@@ -56,6 +56,9 @@ def fit_calibration(rec: Recording) -> TestFit:
         s2 = float(resid @ resid) / dof
         se = math.sqrt(s2 * np.linalg.inv(X.T @ X)[0, 0])
         tq = float(stats.t.ppf(0.975, dof))
+        if abs(coef[0]) <= tq * se:
+            raise rec.error(col, f"the voltage does not follow the {ref_unit} setting (slope {coef[0]:.3g} +/- "
+                                 f"{tq * se:.2g} {unit}, not clear of zero): is the sensor connected?")
         est[f"K_{name}"] = Estimate(float(coef[0]), float(coef[0] - tq * se), float(coef[0] + tq * se), unit, OLS,
                                     rec.source, dof)
         order = np.argsort(x, kind="stable")
@@ -63,6 +66,11 @@ def fit_calibration(rec: Recording) -> TestFit:
                             points=True))
     return TestFit(rec.source, rec.test, est, panels=panels, title="sensor calibration")
 
+
+# no sensor and no amplifier output is free of noise: a channel that is exactly a constant (or a line)
+# is disconnected, saturated or synthetic, and its "noise level" of 0 would be a verdict about nothing
+ROUNDING = 1e-9  # residual rms, relative to the largest |voltage|, that is the line fit's own rounding
+CONSTANT = "exactly constant about its trend (no noise at all): is the channel connected, or saturated?"
 
 def noise_level(x: np.ndarray, dt: float, source: str) -> tuple[Estimate, Estimate, bool]:
     """(rms, bandwidth, resolved) of a quiet sensor's voltage, its mean and trend removed.
@@ -81,9 +89,8 @@ def noise_level(x: np.ndarray, dt: float, source: str) -> tuple[Estimate, Estima
     t = np.arange(n)
     r = x - np.polyval(np.polyfit(t, x, 1), t)
     var = float(r @ r) / (n - 2)
-    if var == 0.0:
-        return (Estimate(0.0, 0.0, 0.0, "V", CHI2_AR1, source),
-                Estimate(0.5 / dt, 0.5 / dt, 0.5 / dt, "Hz", CHI2_AR1, source), False)
+    if math.sqrt(var) <= ROUNDING * float(np.max(np.abs(x))):
+        raise ValueError(CONSTANT)
     a = float(r[1:] @ r[:-1]) / float(r @ r)
     a = min(max(a, -0.999), 0.999)
     se_a = math.sqrt((1 - a * a) / n)
@@ -108,6 +115,14 @@ def _local_scale(r: np.ndarray, blocks: int = QUIET_BLOCKS) -> float:
     where one scale over the whole recording would grow with them and hide them."""
     parts = np.array_split(r, blocks)
     return float(np.median([1.4826 * np.median(np.abs(p - np.median(p))) for p in parts]))
+
+
+def _noise_of(rec: Recording, col: str, x: np.ndarray) -> tuple[Estimate, Estimate, bool]:
+    """:func:`noise_level` of one column, a channel without any noise refused by name."""
+    try:
+        return noise_level(x, rec.dt, rec.source)
+    except ValueError:
+        raise rec.error(col, CONSTANT) from None
 
 
 def fit_quiet(rec: Recording) -> TestFit:
@@ -136,7 +151,7 @@ def fit_quiet(rec: Recording) -> TestFit:
             raise rec.error(col, f"not quiet: {r[k]:.3g} V off its level at {t[k]:.3g} s, {abs(r[k]) / robust:.0f} "
                                  "noise levels: clamp the cart and the pendulum and keep the bench still")
         name = col.removesuffix("_V")
-        rms, band, resolved = noise_level(x, dt, rec.source)
+        rms, band, resolved = _noise_of(rec, col, x)
         est[f"noise_{name}"] = rms
         est[f"bandwidth_{name}"] = band
         if not resolved:
@@ -167,7 +182,7 @@ def fit_drift(rec: Recording) -> TestFit:
     spread = max(float(np.std(v - np.polyval(first, tc))), 1e-12)
     fit = lsq.fit(lambda p: p[0] * tc + p[1] - v, first, np.array([spread / max(np.ptp(t), 1e-9), spread]))
     est = {"drift": normal(fit.p[0], fit.se(0), "V/s", LSQ_HAC, rec.source)}
-    est["output_noise"], _, _ = noise_level(v, rec.dt, rec.source)
+    est["output_noise"], _, _ = _noise_of(rec, "out_V", v)
     line = fit.p[0] * tc + fit.p[1]
     return TestFit(rec.source, rec.test, est, title="held integrator",
                    notes=[f"drift {abs(fit.p[0]) * 1e3:.3g} mV/s: a scenario's drift = {abs(fit.p[0]):.3g} "

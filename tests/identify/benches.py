@@ -21,9 +21,13 @@ def true_bench(**actuator) -> BenchProfile:
     """uw-1991 with every identified value changed (TRUE_BENCH), the actuator's fields as given."""
     b = load_bench("uw-1991").model_dump()
     b["id"], b["name"] = "test-bench", "a bench unlike uw-1991"
-    b["actuator"].update(K_U=11.0, tau=0.3, dead_zone_V=0.35, **actuator)
-    b["sensors"].update(s=4.5, theta=3.8, s_dot=0.62, noise_V_rms={"s": 0.003, "theta": 0.0015, "s_dot": 0.008},
-                        noise_bandwidth_Hz=150.0)
+    for key, value in TRUE_BENCH.items():  # the one place the true values are written
+        *path, last = key.split(".")
+        table = b
+        for part in path:
+            table = table[part]
+        table[last] = value
+    b["actuator"].update(**actuator)
     return BenchProfile.model_validate(b)
 
 

@@ -30,6 +30,7 @@ DIAGRAM_ROOM_MM_MORE = 46.0
 # more room takes it (the sheet runs longer) rather than print labels nobody can read.
 PRINTED_MIN_PT = 6.0
 MM_PER_PT = 25.4 / 72.0
+PAGE_DIAGRAM_MM = 236.0  # one page's 250 mm of content less a heading and a caption: the tallest a diagram gets
 
 
 @dataclass(frozen=True)
@@ -80,7 +81,7 @@ def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[
     ctx = sheet_context(netlist, summary, procedure)
     figures = [("", svg)] if isinstance(svg, str) else svg
     html = _env(autoescape=True).get_template("patch-sheet.html.j2").render(
-        **ctx, figures=[(caption, _inline_svg(body, ctx["diagram_mm"])) for caption, body in figures])
+        **ctx, figures=[(caption, *_inline_svg(body, ctx["diagram_mm"])) for caption, body in figures])
     md = _env(autoescape=False).get_template("patch-sheet.md.j2").render(**ctx)
     return _end(html), _end(md)
 
@@ -244,26 +245,46 @@ def _fmt(v: float | str) -> str:
     return v if isinstance(v, str) else _minus(f"{v:.4g}")
 
 
-def diagram_height_mm(svg: str, room_mm: float) -> float:
-    """The most a diagram may take in height on the sheet: the room, or more when shrinking it into
-    the room would print its smallest text below PRINTED_MIN_PT (its size read from the SVG's own
-    width and height, in pt)."""
+@dataclass(frozen=True)
+class Placement:
+    """How a diagram sits on the sheet: its height cap and the size its smallest label prints at."""
+
+    room_mm: float  # what the sheet planned for it
+    height_mm: float  # its cap: the room, or more for PRINTED_MIN_PT, at most a page
+    printed_pt: float
+
+    @property
+    def note(self) -> str:
+        """What the sheet says under a diagram too tall for one page at PRINTED_MIN_PT."""
+        if self.printed_pt >= PRINTED_MIN_PT - 1e-9:
+            return ""
+        return (f"Too tall for one page at {PRINTED_MIN_PT:g} pt: its smallest labels print at "
+                f"{self.printed_pt:.1f} pt; zoom in on screen, or print wiring.svg larger.")
+
+
+def placement(svg: str, room_mm: float) -> Placement:
+    """Where a diagram may grow on the sheet: from the room planned for it up to the height that
+    prints its smallest label at PRINTED_MIN_PT, but never past one page (PAGE_DIAGRAM_MM). Its
+    size is read from the SVG's own width and height (pt); SMALLEST_PT is its smallest label."""
     size = {k: float(v) for k, v in re.findall(r'\b(width|height)="([0-9.eE+-]+)pt"', svg.split(">", 1)[0])}
     if set(size) != {"width", "height"}:
         raise ValueError("the wiring SVG must give its width and height in pt")
-    scale = PRINTED_MIN_PT / SMALLEST_PT  # the least the diagram may be shrunk
-    return max(room_mm, math.ceil(size["height"] * scale * MM_PER_PT))
+    width_mm, height_mm = size["width"] * MM_PER_PT, size["height"] * MM_PER_PT
+    needed = math.ceil(height_mm * PRINTED_MIN_PT / SMALLEST_PT)
+    cap = min(max(room_mm, needed), PAGE_DIAGRAM_MM)
+    scale = min(1.0, SHEET_WIDTH_MM / width_mm, cap / height_mm)
+    return Placement(room_mm, cap, SMALLEST_PT * scale)
 
 
-def _inline_svg(svg: str, room_mm: float) -> str:
-    """The SVG without an XML declaration, scaled to the sheet's width and to at most
-    :func:`diagram_height_mm` in height."""
+def _inline_svg(svg: str, room_mm: float) -> tuple[str, str]:
+    """The SVG without an XML declaration, scaled to the sheet's width and to at most its
+    :func:`placement` height; and the note that goes under it (empty when it prints at 6 pt)."""
     body = svg.strip()
     if body.startswith("<?xml"):
         body = body[body.index("?>") + 2:].lstrip()
-    height = diagram_height_mm(body, room_mm)
+    where = placement(body, room_mm)
     return body.replace("<svg ", f'<svg class="wiring" role="img" aria-label="wiring diagram" '
-                                 f'data-room-mm="{room_mm:g}" style="max-height: {height:g}mm" ', 1)
+                                 f'data-room-mm="{room_mm:g}" style="max-height: {where.height_mm:g}mm" ', 1), where.note
 
 
 def _env(autoescape: bool) -> jinja2.Environment:

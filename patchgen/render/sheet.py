@@ -283,8 +283,9 @@ def _inline_svg(svg: str, room_mm: float) -> tuple[str, str]:
     if body.startswith("<?xml"):
         body = body[body.index("?>") + 2:].lstrip()
     where = placement(body, room_mm)
-    return body.replace("<svg ", f'<svg class="wiring" role="img" aria-label="wiring diagram" '
-                                 f'data-room-mm="{room_mm:g}" style="max-height: {where.height_mm:g}mm" ', 1), where.note
+    tag = (f'<svg class="wiring" role="img" aria-label="wiring diagram" data-room-mm="{room_mm:g}" '
+           f'style="max-height: {where.height_mm:g}mm" ')
+    return body.replace("<svg ", tag, 1), where.note
 
 
 def _env(autoescape: bool) -> jinja2.Environment:

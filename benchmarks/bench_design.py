@@ -20,7 +20,10 @@ def main() -> None:
     repeats = int(sys.argv[1]) if len(sys.argv) > 1 else 5
     print(f"{'spec':28s} {'median s':>9s} {'max s':>7s}")
     worst = 0.0
-    for spec in sorted((ROOT / "designs").glob("*.toml")):
+    specs = sorted((ROOT / "designs").glob("*.toml"))
+    if not specs:
+        sys.exit(f"no design specs in {ROOT / 'designs'}: nothing to time")
+    for spec in specs:
         times = []
         for _ in range(repeats):
             t0 = time.perf_counter()

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-DESIGNS = ROOT / "patchgen" / "designs"
+DESIGNS = ROOT / "designs"
 
 
 @pytest.fixture

@@ -13,13 +13,14 @@ from pathlib import Path
 
 from patchgen.inputs.errors import InputError
 
-# kind -> folder inside the package
+# kind -> (package, folder inside it); designs, sims and templates sit at the repository's top
+# level and are installed as packages of their own (pyproject.toml maps them in)
 FOLDERS = {
-    "design": "designs",
-    "scenario": "sims",
-    "machine": "profiles/machines",
-    "bench": "profiles/benches",
-    "template": "templates",
+    "design": ("patchgen.designs", ""),
+    "scenario": ("patchgen.sims", ""),
+    "machine": ("patchgen", "profiles/machines"),
+    "bench": ("patchgen", "profiles/benches"),
+    "template": ("patchgen.templates", ""),
 }
 # what `patchgen examples` copies out for a user to edit: kind -> sub-folder of the examples folder
 EXAMPLES = {"design": "designs", "scenario": "sims", "machine": "machines", "bench": "benches"}
@@ -27,7 +28,8 @@ EXAMPLES = {"design": "designs", "scenario": "sims", "machine": "machines", "ben
 
 def folder(kind: str) -> Traversable:
     """The package folder holding the shipped files of one kind."""
-    return resources.files("patchgen").joinpath(*FOLDERS[kind].split("/"))
+    package, sub = FOLDERS[kind]
+    return resources.files(package).joinpath(*sub.split("/")) if sub else resources.files(package)
 
 
 def shipped(kind: str) -> list[str]:

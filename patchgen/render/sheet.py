@@ -1,9 +1,10 @@
 """The patch sheet: what a lab needs to wire, set and run a patch, as HTML and Markdown.
 
-Rendered from the templates shipped in the package (patchgen/templates, jinja2). The HTML sheet is
-printable on A4 and on Letter alike: its page is the area common to both (210 mm x 279 mm) with
-margins, so nothing is wider than 186 mm or taller than 250 mm. Everything shown is computed from
-the netlist and the design summary, so the same inputs give the same bytes.
+Rendered from the jinja2 templates shipped in the package (templates/ in the repository,
+patchgen.templates when installed). The HTML sheet is printable on A4 and on Letter alike: its
+page is the area common to both (210 mm x 279 mm) with margins, so nothing is wider than 186 mm
+or taller than 250 mm. Everything shown is computed from the netlist and the design summary, so
+the same inputs give the same bytes.
 """
 
 from __future__ import annotations
@@ -290,7 +291,7 @@ def _inline_svg(svg: str, room_mm: float) -> tuple[str, str]:
 
 def _env(autoescape: bool) -> jinja2.Environment:
     return jinja2.Environment(
-        loader=jinja2.PackageLoader("patchgen", "templates"),
+        loader=jinja2.PackageLoader("patchgen.templates", "."),
         autoescape=autoescape,
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,

@@ -60,7 +60,7 @@ def test_halving_the_default_step_moves_theta_less_than_1e_4_rad_rms(name, ideal
     step); the bench runs include dead zone, lag, clipping and the limit switches."""
     net = read_netlist(ROOT / "tests/fixtures/thesis-ch5.netlist.json")
     bench, gp6 = load_bench("uw-1991"), load_machine("gp6")
-    base = load_scenario(ROOT / "patchgen" / "sims" / f"{name}.toml").model_dump()
+    base = load_scenario(ROOT / "sims" / f"{name}.toml").model_dump()
     _, settings = engine_config(compile_circuit(net, gp6, bench), PLANT, bench, gp6,
                                 Scenario.model_validate(base), ideal=ideal)
     step = settings.dt_s

@@ -32,7 +32,7 @@ from tests.conftest import ROOT, design_path
 
 from .engine_reference import reference_runs
 
-SIMS = ROOT / "patchgen" / "sims"
+SIMS = ROOT / "sims"
 FIELDS = ("trip_time", "fall_time", "max_abs_theta", "max_abs_s", "rms_theta", "max_abs_u_c",
           "max_abs_force", "overload_first", "overload_time", "final_state")
 

@@ -19,7 +19,7 @@ from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
 
 ROOT = Path(__file__).resolve().parents[2]
-SIMS = ROOT / "patchgen" / "sims"
+SIMS = ROOT / "sims"
 # thesis table B.1
 PLANT = PlantParams(M=3.552, m=0.324, l=0.429, g=9.807, b_VF=2.5775, c=0.001, d=1.090)
 BENCH = load_bench("uw-1991")

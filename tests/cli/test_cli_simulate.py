@@ -54,7 +54,7 @@ def test_linearised_ch5_loop_matches_conventions():
 
 def test_bad_scenario_field_one_line(tmp_path):
     p = tmp_path / "bad.toml"
-    p.write_text((ROOT / "patchgen" / "sims" / "offset-10deg.toml").read_text().replace("duration_s", "duration"))
+    p.write_text((ROOT / "sims" / "offset-10deg.toml").read_text().replace("duration_s", "duration"))
     r = run("simulate", "thesis-ch5", "--scenario", str(p), "-o", str(tmp_path / "o"))
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
     assert str(p) in r.stderr and "duration" in r.stderr
@@ -62,7 +62,7 @@ def test_bad_scenario_field_one_line(tmp_path):
 
 
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
-@pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "patchgen" / "designs").glob("*.toml")))
+@pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "designs").glob("*.toml")))
 def test_spice_ideal_agrees_within_one_percent(tmp_path, name):
     r = run("spice", name, "--scenario", "offset-10deg", "--ideal", "-o",
             str(tmp_path), "--json", "--svg")
@@ -110,7 +110,7 @@ def test_parameter_spread_monte_carlo():
     d, m = design_from_path(design_path("bench-recommended"))
     net = build_patch(d, m)
     plant, bench = plant_params(d.spec), load_bench("uw-1991")
-    sc = load_scenario(ROOT / "patchgen" / "sims" / "offset-10deg.toml")
+    sc = load_scenario(ROOT / "sims" / "offset-10deg.toml")
     base = simulate(net, plant, bench, m, sc, runs=8, keep_history=False)
     zero = simulate(net, plant, bench, m, sc, runs=8, keep_history=False, spread={"M": 0.0})
     wide = simulate(net, plant, bench, m, sc, runs=8, keep_history=False, spread={"M": 0.3, "l": 0.3})

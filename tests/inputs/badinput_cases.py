@@ -27,12 +27,14 @@ from .badinput_toml import (
     with_field,
 )
 
-PKG = Path(__file__).resolve().parents[2] / "patchgen"
+ROOT = Path(__file__).resolve().parents[2]
 FIFO, DIRECTORY, LOOP = "<fifo>", "<directory>", "<symlink loop>"  # special files to lay out
 
 
 def shipped(folder: str, name: str) -> dict:
-    return tomllib.loads((PKG / folder / f"{name}.toml").read_text())
+    """A shipped file's TOML: designs and sims at the repository's top level, profiles in the package."""
+    base = ROOT / "patchgen" if folder.startswith("profiles/") else ROOT
+    return tomllib.loads((base / folder / f"{name}.toml").read_text())
 
 
 @dataclass(frozen=True)

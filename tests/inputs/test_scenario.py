@@ -10,7 +10,7 @@ import pytest
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import NoiseLevels, load_scenario
 
-SIMS = Path(__file__).resolve().parents[2] / "patchgen" / "sims"
+SIMS = Path(__file__).resolve().parents[2] / "sims"
 
 
 @pytest.mark.parametrize("name", ["offset-10deg", "finger-push", "step-cart", "hold-120s"])

@@ -21,7 +21,7 @@ def test_every_shipped_design_round_trips(name, tmp_path):
 def test_a_profile_named_by_path_is_written_as_an_absolute_path(tmp_path, monkeypatch):
     bench = tmp_path / "my-bench.toml"
     bench.write_bytes((ROOT / "patchgen" / "profiles" / "benches" / "uw-1991.toml").read_bytes())
-    text = (ROOT / "patchgen" / "designs" / "thesis-ch5.toml").read_text()
+    text = (ROOT / "designs" / "thesis-ch5.toml").read_text()
     (tmp_path / "spec.toml").write_text(text.replace('bench = "uw-1991"', 'bench = "my-bench.toml"'))
     monkeypatch.chdir(tmp_path)
     written = spec_toml(load_spec("spec.toml"))

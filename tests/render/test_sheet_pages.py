@@ -43,7 +43,7 @@ def test_written_sheet_fits_two_pages(tmp_path, args):
 
 def _variant(tmp_path, name, **changes):
     """A shipped design with some lines changed, written as a spec file."""
-    text = (ROOT / "patchgen" / "designs" / f"{name}.toml").read_text()
+    text = (ROOT / "designs" / f"{name}.toml").read_text()
     for old, new in changes.items():
         text = text.replace(old.replace("__", " "), new)
     path = tmp_path / f"{name}-variant.toml"
@@ -56,7 +56,7 @@ def _variant(tmp_path, name, **changes):
 def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_path, name):
     that = _variant(tmp_path, name, **{'machine__=__"gp6"': 'machine = "the-analog-thing"'})
     two = tmp_path / "two.toml"
-    text = (ROOT / "patchgen" / "designs" / f"{name}.toml").read_text()
+    text = (ROOT / "designs" / f"{name}.toml").read_text()
     text = re.sub(r'kind = "\w*differentiator"', 'kind = "reduced_observer"', text)
     text = re.sub(r"rolloff_s = [^\n]*\n", "", text)
     text = text.replace("[patch]\n", '[patch]\nunits = "auto"\n') if "[patch]" in text else (

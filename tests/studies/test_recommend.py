@@ -26,7 +26,7 @@ from patchgen.studies.recommend import Candidate, Recommendation, recommend
 from tests.conftest import ROOT, design_path
 from tests.patch.test_patch_roundtrip import check_roundtrip
 
-HOLD = ROOT / "patchgen" / "sims" / "hold-120s.toml"
+HOLD = ROOT / "sims" / "hold-120s.toml"
 RUNS = 200  # 200 noise seeds, as recommend's default
 BENCH = load_bench("uw-1991")  # the bench bench-recommended names
 

@@ -1,0 +1,1 @@
+"""The design specs patchgen ships (TOML data, installed as patchgen.designs)."""

@@ -1,0 +1,1 @@
+"""The simulation scenarios patchgen ships (TOML data, installed as patchgen.sims)."""

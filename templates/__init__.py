@@ -1,0 +1,1 @@
+"""The patch-sheet templates patchgen ships (jinja2 data, installed as patchgen.templates)."""

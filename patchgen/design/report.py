@@ -8,6 +8,7 @@ from rich.table import Table
 
 from patchgen.design.lqg import Design
 from patchgen.design.margins import Margins
+from patchgen.design.precision import gain_text, significant_digits
 
 
 def _c(v: complex) -> list[float]:
@@ -37,6 +38,10 @@ def design_dict(d: Design) -> dict:
         "Q": d.Q.tolist(),
         "R": float(d.R[0, 0]),
         "K": [float(k) for k in d.K[0]],
+        # how far each gain moves when the Riccati inputs move at rounding level, and the
+        # significant digits that leaves fixed (0: not determined beyond its size)
+        "K_spread": [float(v) for v in d.spread.K[0]],
+        "K_digits": d.spread.K_digits(d.K),
         "open_loop_poles": [_c(p) for p in d.open_loop_poles],
         "closed_loop_poles": [_c(p) for p in d.closed_loop_poles],
         "zeros": {k: [_c(z) for z in v] for k, v in d.zeros.items()},
@@ -48,6 +53,10 @@ def design_dict(d: Design) -> dict:
         est = {"kind": e.kind, "states": list(e.states), "poles": [_c(p) for p in e.poles]}
         if e.kind == "kalman":
             est["L"] = e.L.tolist()
+            if d.spread.L is not None:
+                est["L_spread"] = d.spread.L.tolist()
+                est["L_digits"] = [[significant_digits(float(v), float(u)) for v, u in zip(row, urow)]
+                                   for row, urow in zip(e.L, d.spread.L)]
             est["rho"] = e.rho
             est["rho_tries"] = [{"rho": t.rho, "accepted": t.accepted, "margins": margins_dict(t.margins)}
                                 for t in e.rho_tries]
@@ -59,6 +68,7 @@ def design_dict(d: Design) -> dict:
     return out
 
 
+REPORT_DIGITS = 7  # significant digits of a gain in the report (the thesis prints -249.4119)
 SMALL_POLE = 1e-3  # 1/s: a pole nearer the origin than this prints in significant digits, not four decimals
 REAL_POLE = 1e-9  # 1/s: an imaginary part below this is rounding; the pole prints as real
 
@@ -112,9 +122,18 @@ def print_design(d: Design, console: Console) -> None:
     g.add_column("state")
     g.add_column("Q", justify="right")
     g.add_column("K", justify="right")
+    cut = []
     for i, s in enumerate(d.states):
-        g.add_row(s, f"{d.Q[i, i]:g}", f"{d.K[0, i]:.4f}")
+        text, flagged = gain_text(float(d.K[0, i]), float(d.spread.K[0, i]), REPORT_DIGITS)
+        g.add_row(s, f"{d.Q[i, i]:g}", text + (" *" if flagged else ""))
+        if flagged:
+            n = significant_digits(float(d.K[0, i]), float(d.spread.K[0, i]))
+            cut.append(f"{s} to {n} significant digits" if n else f"{s} not beyond its size")
     console.print(g)
+    if cut:
+        console.print(f"[yellow]*[/yellow] the Riccati equation fixes {'; '.join(cut)} (a nearly uncontrollable "
+                      f"mode), fewer than the {REPORT_DIGITS} printed elsewhere: further digits would follow the "
+                      "machine's arithmetic, not the design")
     console.print(f"R = {d.R[0, 0]:g}")
     p = Table(title="Poles and zeros", title_justify="left")
     p.add_column("")

@@ -29,7 +29,14 @@ EXAMPLES = {"design": "designs", "scenario": "sims", "machine": "machines", "ben
 def folder(kind: str) -> Traversable:
     """The package folder holding the shipped files of one kind."""
     package, sub = FOLDERS[kind]
-    return resources.files(package).joinpath(*sub.split("/")) if sub else resources.files(package)
+    try:
+        top = resources.files(package)
+    except ModuleNotFoundError:
+        # a source checkout run without installing it: the data folder beside the package
+        top = Path(__file__).resolve().parents[2] / package.rpartition(".")[2]
+        if not top.is_dir():
+            raise
+    return top.joinpath(*sub.split("/")) if sub else top
 
 
 def shipped(kind: str) -> list[str]:

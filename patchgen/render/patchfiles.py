@@ -44,7 +44,7 @@ def sheet_summary(d: Design, sections: Sequence[SheetSection] = ()) -> SheetSumm
         kind += f", roll-off {d.estimator.rolloff_s:g} s"
     return SheetSummary(design=d.spec.name, description=d.spec.description, states=list(d.states),
                         K=[float(k) for k in d.K[0]], poles=list(d.closed_loop_poles), margins=margins,
-                        estimator=kind, sections=list(sections))
+                        estimator=kind, sections=list(sections), K_spread=[float(u) for u in d.spread.K[0]])
 
 
 def static_section(check: StaticCheck, net: Netlist) -> SheetSection:

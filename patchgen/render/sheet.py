@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import jinja2
 
+from patchgen.design.precision import gain_text, significant_digits
 from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
 from patchgen.patch.parts import fmt_value
 from patchgen.patch.reading import read
@@ -61,6 +62,7 @@ class SheetSummary:
     margins: dict[str, dict[str, float | str]]
     estimator: str
     sections: list[SheetSection] = field(default_factory=list)
+    K_spread: list[float] = field(default_factory=list)  # per gain, the design's (0: fully determined)
 
 
 def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[str, str]],
@@ -142,8 +144,15 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         sign_checks.append({"pot": p.id, "moved": moved, "through": p.source,
                             "u_c": "+" if sign * pol > 0 else "−"})
 
-    states = [{"state": quantity_label(s), "name": s, "K": _minus(f"{k:.6g}"), "unit": gain_unit(s)}
-              for s, k in zip(summary.states, summary.K)]
+    spread = summary.K_spread or [0.0] * len(summary.K)
+    states, gain_notes = [], []
+    for s, k, u in zip(summary.states, summary.K, spread):
+        text, cut = gain_text(k, u)
+        states.append({"state": quantity_label(s), "name": s, "K": _minus(text) + (" *" if cut else ""),
+                       "unit": gain_unit(s)})
+        if cut:
+            n = significant_digits(k, u)
+            gain_notes.append(f"{s}: {n} significant digits" if n else f"{s}: not beyond its size")
     parts = [{"id": p.id, "fit": p.fit, "value": fmt_value(p.value, "Ω" if p.unit == "ohm" else "F"),
               "tolerance": f"±{100 * p.tolerance:g} %", "where": f"{p.amplifier}{' ' + p.jack if p.jack else ''}",
               "connection": p.connection, "purpose": p.purpose} for p in net.parts]
@@ -155,6 +164,9 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
     diagram_mm = DIAGRAM_ROOM_MM.get(len(summary.sections), DIAGRAM_ROOM_MM_MORE)
     return {
         "banners": [sec.banner for sec in summary.sections if sec.banner],
+        "gain_note": ("A gain marked * is fixed by the design to fewer digits (" + "; ".join(gain_notes)
+                      + "; a nearly uncontrollable mode): further digits, and those of the pots set from it, "
+                      "follow the computer's arithmetic, not the design.") if gain_notes else "",
         "parts": parts,
         "diagram_mm": diagram_mm,
         "net": net,

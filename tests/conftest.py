@@ -4,6 +4,8 @@ from pathlib import Path
 
 import pytest
 
+import patchgen  # noqa: F401  first, so its one-thread BLAS setting is in place before numpy loads
+
 ROOT = Path(__file__).resolve().parent.parent
 DESIGNS = ROOT / "designs"
 

@@ -79,20 +79,20 @@ def _runs(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return start, length, x[start]
 
 
-def flat_top(x: np.ndarray) -> tuple[int, int, float] | None:
+def flat_top(x: np.ndarray, settles: bool = False) -> tuple[int, int, float] | None:
     """A clipped channel's longest flat top: (first sample, samples held, value), else None.
 
     A measured voltage or force carries noise, so it never repeats its largest (or smallest) value
     sample after sample unless a recorder or amplifier held it at its limit. A run at the extreme is
-    a flat top when it lasts CLIP_RUN samples and no interior value (a coarse converter's level, a
-    cart at rest) is held a CLIP_CONTRAST-th as long; a run that ends the recording (a channel that
-    settled) does not count."""
+    a flat top when it lasts CLIP_RUN samples and no interior value (a coarse converter's level) is
+    held a CLIP_CONTRAST-th as long. With ``settles`` (a cart that comes to rest at the end of its
+    coast, read by a coarse converter) a run that ends the recording does not count."""
     if x.size < 2 * CLIP_RUN:
         return None
     start, length, value = _runs(x)
     inner = (value > x.min()) & (value < x.max())
     longest_inner = int(length[inner].max()) if np.any(inner) else 0
-    at_edge = ~inner & (start + length < x.size)
+    at_edge = ~inner & ((start + length < x.size) | (not settles))
     if not np.any(at_edge):
         return None
     k = int(np.argmax(np.where(at_edge, length, 0)))

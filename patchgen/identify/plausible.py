@@ -25,13 +25,14 @@ def field_bounds(model: type, name: str) -> tuple[float, float]:
 
 # estimate -> (what it is, model and field it becomes, the column it is read from, what to look at)
 CHECKED = {
-    "K_U": ("the force per volt K_U", BenchActuator, "K_U", "force_N", "is the gauge read in newtons, the right way "
-            "round?"),
-    "tau": ("the lag tau", BenchActuator, "tau", "force_N", "is t_s in seconds?"),
+    "K_U": ("the force per volt K_U", BenchActuator, "K_U", "force_N", "is force_N in newtons and u_c_V in volts, "
+            "both the same way round?"),
+    "tau": ("the lag tau", BenchActuator, "tau", "force_N", "is t_s in seconds, u_c_V the command as applied?"),
     "dead_zone": ("the dead zone", BenchActuator, "dead_zone_V", "u_c_V", "does the command leave it?"),
-    "K_s": ("the position pot's constant", BenchSensors, "s", "s_V", "is the pot connected, the right way round?"),
-    "K_theta": ("the angle pot's constant", BenchSensors, "theta", "theta_V", "is the pot connected, the right way "
-                "round?"),
+    "K_s": ("the position pot's constant", BenchSensors, "s", "s_V", "is s_m in metres, the pot connected the "
+            "right way round?"),
+    "K_theta": ("the angle pot's constant", BenchSensors, "theta", "theta_V", "is theta_rad in radians, the pot "
+                "connected the right way round?"),
     "l": ("the effective length l", PlantSpec, "l", "theta_V", "is t_s in seconds?"),
     "c": ("the pendulum's friction c", PlantSpec, "c", "theta_V", "is t_s in seconds?"),
 }
@@ -68,7 +69,7 @@ def check_fit(fit: TestFit, k_s: float, total_mass: float | None) -> None:
         k = k_s / rho.value if rho.value else float("inf")
         if not lo <= k <= hi:
             raise _refuse(fit, "s_dot_V", "the tachometer's constant K_s / rho", k, "V/(m/s)", lo, hi,
-                          "is the tachometer connected, the right way round?")
+                          "are s_V and s_dot_V the same way round?")
     if fit.test == "coast_down" and decay is not None and total_mass is not None:
         lo, hi = field_bounds(PlantSpec, "b_VF")
         b = decay.value * total_mass

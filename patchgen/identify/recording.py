@@ -209,7 +209,7 @@ def parse_recording(text: str, source: str) -> Recording:
     InputError
         One line naming the file and the column (or line) at fault.
     """
-    lines = LINE_BREAK.split(text)
+    lines = LINE_BREAK.split(text.removeprefix("\ufeff"))
     notes: dict[str, str] = {}
     seen: dict[str, int] = {}
     i = 0
@@ -257,7 +257,8 @@ def _check_signals(rec: Recording) -> None:
         problem = signal_problem(split_column(name)[1], x)
         if problem:
             raise rec.error(name, problem)
-        top = flat_top(x) if name in MEASURED and "t_s" in rec.columns else None
+        settles = rec.test == "coast_down" and name == "s_V"  # the cart comes to rest where it stopped
+        top = flat_top(x, settles) if name in MEASURED and "t_s" in rec.columns else None
         if top:
             k, run, v = top
             t = rec.columns["t_s"]

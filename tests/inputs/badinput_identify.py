@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .badinput_cases import DIRECTORY, FIFO, Case
+from .badinput_cases import DIRECTORY, FIFO, PKG, SPEC, Case
+from .badinput_options import GOOD_SCENARIO, GOOD_SPEC
 from .badinput_recordings import REC, _case, _rows, _with_column, _write, good_files
 
 
@@ -115,7 +116,28 @@ def _file_cases(g: dict[str, str]) -> list[Case]:
     ]
 
 
+def _spread_cases() -> list[Case]:
+    """Bench profiles whose [uncertainty] is wrong, given to simulate --bench-spread and bench-test --bench."""
+    uw = (PKG / "profiles" / "benches" / "uw-1991.toml").read_text()
+    bench = "@TMP@/b.toml"
+    sim = ("simulate", SPEC, "--scenario", "@TMP@/sc.toml", "--bench", bench, "--bench-spread", "-o", "@TMP@/out")
+    bt = ("bench-test", SPEC, "--bench", bench, "-o", "@TMP@/out")
+    tables = {
+        "dotted-unquoted": ("noise_V_rms.s = [0.001, 0.003]", "uncertainty.noise_V_rms"),
+        "sensor-crosses-zero": ('"sensors.s" = [-1.0, 6.0]', "uncertainty.sensors.s"),
+        "huge": ("K_U = [1.0, 1e300]", "uncertainty.K_U"),
+        "subnormal": ("K_U = [1e-320, 20.0]", "uncertainty.K_U"),
+        "distribution-unknown": ('distribution = "lognormal"', "uncertainty.distribution"),
+    }
+    out = []
+    for name, (line, field) in tables.items():
+        files = {"spec.toml": GOOD_SPEC, "sc.toml": GOOD_SCENARIO, "b.toml": f"{uw}\n[uncertainty]\n{line}\n"}
+        out.append(Case(f"bench-spread-{name}", sim, bench, field, files))
+        out.append(Case(f"bench-test-range-{name}", bt, bench, field, files))
+    return out
+
+
 def identify_cases() -> list[Case]:
     """Every case of this module."""
     g = good_files()
-    return _number_cases(g) + _range_cases(g) + _clip_cases(g) + _file_cases(g)
+    return _number_cases(g) + _range_cases(g) + _clip_cases(g) + _file_cases(g) + _spread_cases()

@@ -87,8 +87,8 @@ def flat_top(x: np.ndarray, settles: bool = False) -> tuple[int, int, float] | N
     a flat top when it lasts CLIP_RUN samples and no interior value (a coarse converter's level) is
     held a CLIP_CONTRAST-th as long. With ``settles`` (a cart that comes to rest at the end of its
     coast, read by a coarse converter) a run that ends the recording does not count."""
-    if x.size < 2 * CLIP_RUN:
-        return None
+    if x.size < 2 * CLIP_RUN or x.min() == x.max():
+        return None  # a constant channel is refused as one (patchgen.identify.sensors)
     start, length, value = _runs(x)
     inner = (value > x.min()) & (value < x.max())
     longest_inner = int(length[inner].max()) if np.any(inner) else 0

@@ -20,6 +20,7 @@ from scipy.signal import lfilter
 
 from patchgen.identify import lsq
 from patchgen.identify.estimate import LSQ_HAC, Z_REJECT, Check, Panel, TestFit, normal
+from patchgen.identify.lsq import FitError
 from patchgen.identify.recording import Recording
 
 MIN_TAU_S = 1e-4  # s: the fit's floor for the lag (a shorter one is a gain at any sample rate used)
@@ -91,6 +92,8 @@ def _grid_start(u, f, dt, with_zero: bool) -> np.ndarray:
             rss = float(np.sum((A @ c - f) ** 2))
             if rss < best[0]:
                 best = (rss, (c[0], c[1] if with_zero else 0.0, tau, dz, c[-1]))
+    if best[1] is None:
+        raise FitError("no start for the fit: the force is not finite against any lag and dead zone")
     return np.array(best[1])
 
 

@@ -19,14 +19,17 @@ are errors). The standard uncertainties default to the values below, each a choi
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Literal
 
 from pydantic import Field
 
+from patchgen.identify.cells import PLAIN
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Real, bounded
-from patchgen.inputs.validation import read_toml, validate
+from patchgen.inputs.inputfile import decode_text, read_bytes
+from patchgen.inputs.validation import parse_toml, validate
 
 # Standard uncertainties (one sigma) of hand measurements, when a file does not state its own.
 # Assumed: no source gives the thesis's; these are what a stopwatch, a tape and a protractor give.
@@ -89,7 +92,9 @@ def read_figures(path: str | Path) -> Masses | Incline:
         The file and the key at fault.
     """
     source = str(path)
-    data = read_toml(path)
+    raw = read_bytes(path)
+    data = parse_toml(raw, source)
+    _plain_figures(decode_text(raw, source), data, source)
     test = data.get("test")
     if test is None:
         names = " or ".join(f'"{k}"' for k in FIGURES)
@@ -98,3 +103,17 @@ def read_figures(path: str | Path) -> Masses | Incline:
         raise InputError(source, "test", f"unknown test {test!r} in a TOML file (one of {', '.join(FIGURES)}; "
                                          "recorded tests are CSV files)")
     return validate(FIGURES[test], data, source)
+
+
+def _plain_figures(text: str, data: dict, source: str) -> None:
+    """Each figure written in plain decimal notation, as in a recording (patchgen.identify.cells):
+    TOML also reads 0x10, 1_000 and inf, none of them how a measured figure is written."""
+    for key, value in data.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue
+        name = re.escape(key)
+        m = re.search(rf"^[ \t]*(?:{name}|\"{name}\"|'{name}')[ \t]*=[ \t]*([^#\s]+)", text, re.MULTILINE)
+        if m is None or not PLAIN.fullmatch(m.group(1)):
+            shown = m.group(1) if m else str(value)
+            raise InputError(source, key, f"{shown!r} is not a number in plain decimal notation (digits, one "
+                                          "point, an optional exponent)")

@@ -20,6 +20,7 @@ Where each parameter comes from, first choice first:
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,10 +28,13 @@ from patchgen.identify import actuator, friction, pendulum, sensors
 from patchgen.identify.estimate import Check, Estimate, TestFit, combine, normal, welch
 from patchgen.identify.figures import G_TABLE_B1, Incline, Masses, read_figures
 from patchgen.identify.kalman import FitError
+from patchgen.identify.plausible import check_fit
 from patchgen.identify.recording import Recording, expand, read_recording
 from patchgen.inputs.errors import InputError
 from patchgen.profiles.bench import BenchProfile
 
+FITTED_COLUMN = {"actuator_step": "force_N", "actuator_ramp": "force_N", "coast_down": "s_dot_V",
+                 "free_swing": "theta_V", "integrator_drift": "out_V"}  # the channel each fit explains
 MIN_LAG_S = 1e-3  # a bench lag shorter than this is written as a pure gain (the profile's own floor)
 
 
@@ -67,16 +71,30 @@ class Identification:
 
 
 def read_all(paths: list[str]) -> list[Recording | tuple[str, Masses | Incline]]:
-    """Every recording and figures file the paths name (folders expanded), read and checked."""
+    """Every recording and figures file the paths name (folders expanded), read and checked, each
+    once: a file named twice (by two paths) or two files of identical samples or figures would count
+    one test's data as two, and narrow its interval as new data would."""
     out: list[Recording | tuple[str, Masses | Incline]] = []
+    seen: dict[object, str] = {}
     for f in expand(paths):
         suffix = Path(f).suffix
+        real = os.path.realpath(f)
+        if real in seen:
+            raise InputError(f, "test", f"given twice (also as {seen[real]}): a recording counts once")
+        seen[real] = f
         if suffix == ".csv":
-            out.append(read_recording(f))
+            item: Recording | tuple[str, Masses | Incline] = read_recording(f)
+            content = (item.test, tuple((k, v.tobytes()) for k, v in sorted(item.columns.items())))
         elif suffix == ".toml":
-            out.append((f, read_figures(f)))
+            item = (f, read_figures(f))
+            content = (item[1].test, tuple(sorted(item[1].model_dump().items())))
         else:
             raise InputError(f, "", "not a recording (.csv) or test figures (.toml)")
+        if content in seen:
+            raise InputError(f, "test", f"the same {content[0]} data as {seen[content]} (identical numbers): "
+                                        "a recording counts once")
+        seen[content] = f
+        out.append(item)
     return out
 
 
@@ -115,6 +133,7 @@ def identify(paths: list[str], base: BenchProfile) -> Identification:
     for r in recs:
         if r.test == "calibration":
             fits.append(sensors.fit_calibration(r))
+            check_fit(fits[-1], base.sensors.s, None)
     result = Identification(fits, {}, {}, {}, base=base.id)
     k_s = _constant(result, "K_s", "sensors.s", base.sensors.s, "V/m")
     k_theta = _constant(result, "K_theta", "sensors.theta", base.sensors.theta, "V/rad")
@@ -123,8 +142,9 @@ def identify(paths: list[str], base: BenchProfile) -> Identification:
         try:
             fit = _fit(r, base, k_theta, g, mass)
         except FitError as exc:
-            raise InputError(r.source, "", f"the {r.test} fit fails: {exc}") from None
+            raise r.error(FITTED_COLUMN.get(r.test, ""), f"the {r.test} fit fails: {exc}") from None
         if fit is not None:
+            check_fit(fit, k_s, mass.M_kg + mass.m_kg if mass else None)
             fits.append(fit)
     for src, fig in (it for it in items if isinstance(it, tuple)):
         if isinstance(fig, Incline):

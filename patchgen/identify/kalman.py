@@ -31,8 +31,7 @@ UNUSABLE = 1e300  # what the minimiser sees where the likelihood cannot be evalu
 DOF_STEP = 0.5  # the largest step in a noise parameter (a log variance) when differentiating the covariance
 
 
-class FitError(ValueError):
-    """A fit that cannot give an estimate with an interval (the caller names the recording)."""
+FitError = lsq.FitError
 
 
 @dataclass(frozen=True)

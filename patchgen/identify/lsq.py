@@ -96,6 +96,10 @@ def sandwich_meat(jac: np.ndarray, r: np.ndarray) -> np.ndarray:
     return out
 
 
+class FitError(ValueError):
+    """A fit that cannot give an estimate with an interval (the caller names the recording)."""
+
+
 @dataclass(frozen=True)
 class LsqFit:
     """A least-squares fit: parameters, their covariance, residuals (model - data), Jacobian."""
@@ -144,11 +148,16 @@ def fit(residual: Callable[[np.ndarray], np.ndarray], p0: np.ndarray, scale: np.
     scale = np.asarray(scale, float)
     lo, hi = np.broadcast_to(bounds[0], p0.shape), np.broadcast_to(bounds[1], p0.shape)
     p0 = np.clip(p0, lo + 1e-12 * scale, hi - 1e-12 * scale)
+    if not (np.all(np.isfinite(p0)) and np.all(np.isfinite(scale)) and np.all(scale > 0)
+            and np.all(np.isfinite(residual(p0)))):
+        raise FitError("the model cannot be evaluated at its start (no finite residuals)")
     res = least_squares(residual, p0, x_scale=scale, bounds=bounds, diff_step=1e-6, method="trf",
                         xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=400)
     p = res.x
     r = residual(p)
     jac = _jacobian(residual, p, scale)
+    if not (np.all(np.isfinite(r)) and np.all(np.isfinite(jac))):
+        raise FitError("the model cannot be evaluated around its best fit (no finite residuals)")
     bread = np.linalg.pinv(jac.T @ jac)
     meat = sandwich_meat(jac, r)
     n, k = jac.shape

@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import json
 
-from patchgen.identify.identify import Identification, Parameter
+from patchgen.identify.identify import MIN_LAG_S, Identification, Parameter
+from patchgen.identify.plausible import field_bounds
 from patchgen.inputs.spec import PlantSpec
 from patchgen.inputs.validation import validate
-from patchgen.profiles.bench import BenchProfile, check_bench
+from patchgen.profiles.bench import BenchActuator, BenchProfile, BenchSensors, check_bench
+from patchgen.profiles.uncertainty import RANGE_FIELDS as RANGED_FIELDS
 
 # identified value (Identification key) -> its [uncertainty] key (patchgen.profiles.uncertainty)
 RANGED = {"actuator.K_U": "K_U", "actuator.tau": "tau", "actuator.dead_zone_V": "dead_zone_V",
@@ -73,7 +75,8 @@ def profile_data(result: Identification, base: BenchProfile, bench_id: str, name
 def _ranges(result: Identification, data: dict) -> dict:
     """The [uncertainty] table from the 95 % intervals: a normal draw whose +/-2 sigma is the interval
     (the range the simulator and recommend draw benches from). Ends are rounded outward to
-    SIGNIFICANT digits, a lag's low end kept above zero and a dead zone's at or above it."""
+    SIGNIFICANT digits, then kept within what the profile's field takes (a lag's low end at
+    least MIN_LAG_S, a sensor constant's at least its floor)."""
     out: dict = {"distribution": "normal"}
     for key, name in RANGED.items():
         p = result.bench.get(key)
@@ -82,9 +85,20 @@ def _ranges(result: Identification, data: dict) -> dict:
             continue
         v = float(p.value)
         lo, hi = min(e.low, v), max(e.high, v)
-        lo = max(lo, 0.0) if name == "dead_zone_V" else (max(lo, 1e-3) if name == "tau" else max(lo, 1e-9))
-        out[name] = [float(f"{lo * (1 - 1e-6):.{SIGNIFICANT}g}"), float(f"{hi * (1 + 1e-6):.{SIGNIFICANT}g}")]
+        lo = float(f"{max(lo, 0.0) * (1 - 1e-6):.{SIGNIFICANT}g}")
+        hi = float(f"{hi * (1 + 1e-6):.{SIGNIFICANT}g}")
+        # within what the profile's field takes (a lag at least MIN_LAG_S): the interval may reach past it
+        floor, top = _bounds(name)
+        out[name] = [min(max(lo, floor), v), max(min(hi, top), v)]
     return out
+
+
+def _bounds(key: str) -> tuple[float, float]:
+    """The [low, high] a bench profile takes for an [uncertainty] key (a lag: at least MIN_LAG_S)."""
+    path = RANGED_FIELDS[key]
+    model = {"actuator": BenchActuator, "sensors": BenchSensors}[path[0]]
+    lo, hi = field_bounds(model, path[1]) if len(path) == 2 else (0.0, 100.0)
+    return (max(lo, MIN_LAG_S) if key == "tau" else max(lo, 0.0)), hi
 
 
 def bench_toml(result: Identification, base: BenchProfile, bench_id: str, name: str, sources: list[str]) -> str:

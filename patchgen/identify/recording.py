@@ -19,7 +19,6 @@ says what to record for each test.
 
 from __future__ import annotations
 
-import math
 import os
 import re
 import stat
@@ -28,6 +27,14 @@ from pathlib import Path
 
 import numpy as np
 
+from patchgen.identify.cells import (
+    MIN_SAMPLE_INTERVAL_S,
+    flat_top,
+    not_plain,
+    plain_number,
+    signal_problem,
+    unit_problem,
+)
 from patchgen.inputs.errors import InputError
 
 MAX_RECORDING_BYTES = 64 << 20  # 64 MiB: ten minutes of four channels at 2 kHz is some 40 MB of text
@@ -55,6 +62,7 @@ class TestKind:
     any_of: tuple[str, ...] = ()
     min_samples: int = 200
     identifies: str = ""
+    max_dt: float = 0.1  # s: ten samples a second at least (a lag of 0.2 s, a swing of 1.3 s)
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -76,9 +84,10 @@ TESTS = {t.name: t for t in (
     TestKind("quiet", ("t_s",), any_of=("s_V", "theta_V", "s_dot_V"), min_samples=1000,
              identifies="each sensor's noise level and bandwidth"),
     TestKind("integrator_drift", ("t_s", "out_V"), min_samples=100,
-             identifies="an integrator's drift rate"),
+             identifies="an integrator's drift rate", max_dt=10.0),
 )}
 
+LINE_BREAK = re.compile(r"\r\n|\r|\n")  # LF, CRLF or CR; no other character ends a line
 _COMMENT = re.compile(r"^#\s*([A-Za-z_][A-Za-z0-9_ -]*?)\s*=\s*(.*?)\s*$")
 
 
@@ -168,6 +177,17 @@ def _header(source: str, names: list[str], kind: TestKind) -> tuple[list[str], l
     return used, ignored
 
 
+def _header_line(source: str, names: list[str], line: str, number: int) -> None:
+    """Refuse a header that is numbers (no header) or separated by other than commas."""
+    if all(plain_number(n) is not None for n in names):
+        raise InputError(source, "header", f"missing: line {number} is numbers ({line.strip()[:40]!r}); a line "
+                                           "naming the columns comes first, e.g. t_s, u_c_V, force_N")
+    for sep, what in (("\t", "tabs"), (";", "semicolons"), (" ", "spaces")):
+        if len(names) == 1 and len(names[0].split(sep)) > 1:
+            raise InputError(source, "header", f"columns separated by {what} ({line.strip()[:40]!r}): separate "
+                                               "them by commas")
+
+
 def parse_recording(text: str, source: str) -> Recording:
     """A recording from its text.
 
@@ -189,13 +209,18 @@ def parse_recording(text: str, source: str) -> Recording:
     InputError
         One line naming the file and the column (or line) at fault.
     """
-    lines = text.splitlines()
+    lines = LINE_BREAK.split(text.removeprefix("\ufeff"))
     notes: dict[str, str] = {}
+    seen: dict[str, int] = {}
     i = 0
     while i < len(lines) and (not lines[i].strip() or lines[i].lstrip().startswith("#")):
         m = _COMMENT.match(lines[i].strip())
         if m:
-            notes[m.group(1).strip()] = m.group(2)
+            key = m.group(1).strip()
+            if key in seen:
+                raise InputError(source, key, f"given twice (lines {seen[key]} and {i + 1}): write it once")
+            seen[key] = i + 1
+            notes[key] = m.group(2)
         i += 1
     test = notes.pop("test", None)
     if test is None:
@@ -207,30 +232,65 @@ def parse_recording(text: str, source: str) -> Recording:
     if i >= len(lines):
         raise InputError(source, "header", "missing: a line naming the columns, e.g. "
                                            + (", ".join(kind.required) or "s_m, s_V"))
-    names = [n.strip() for n in lines[i].split(",")]
+    names = [n.strip(" \t") for n in lines[i].split(",")]
+    _header_line(source, names, lines[i], i + 1)
     used, ignored = _header(source, names, kind)
     rows = [(k + 1, ln) for k, ln in enumerate(lines) if k > i and ln.strip() and not ln.lstrip().startswith("#")]
     if len(rows) < kind.min_samples:
         raise InputError(source, names[0], f"too few samples: {len(rows)}, the {test} test needs at least "
                                            f"{kind.min_samples}")
-    data = np.empty((len(rows), len(names)))
-    for r, (line, ln) in enumerate(rows):
-        cells = ln.split(",")
-        if len(cells) != len(names):
-            raise InputError(source, f"line {line}", f"{len(cells)} values, the header names {len(names)}")
-        for c, cell in enumerate(cells):
-            try:
-                v = float(cell)
-            except ValueError:
-                raise InputError(source, names[c], f"line {line}: {cell.strip()!r} is not a number") from None
-            if not math.isfinite(v):
-                raise InputError(source, names[c], f"line {line}: {cell.strip()!r} is not a finite number")
-            data[r, c] = v
+    data = _numbers(source, names, rows)
     columns = {n: data[:, names.index(n)].copy() for n in used}
     rec = Recording(source, test, columns, notes, tuple(ignored))
     _check_clock(rec)
     _check_pairs(rec)
+    _check_signals(rec)
     return rec
+
+
+MEASURED = ("force_N", "s_V", "theta_V", "s_dot_V", "out_V")  # read off the bench (not set by hand or commanded)
+
+
+def _check_signals(rec: Recording) -> None:
+    """Every column a fit uses holds a signal, and no measured channel of a time series is clipped."""
+    for name, x in rec.columns.items():
+        problem = signal_problem(split_column(name)[1], x)
+        if problem:
+            raise rec.error(name, problem)
+        settles = rec.test == "coast_down" and name == "s_V"  # the cart comes to rest where it stopped
+        top = flat_top(x, settles) if name in MEASURED and "t_s" in rec.columns else None
+        if top:
+            k, run, v = top
+            t = rec.columns["t_s"]
+            raise rec.error(name, f"clipped: held at exactly {v:.6g} for {run} samples from {t[k]:.4g} s, its "
+                                  f"{'largest' if v == x.max() else 'smallest'} value (a recorder or amplifier at "
+                                  "its limit): record within range")
+
+
+def _numbers(source: str, names: list[str], rows: list[tuple[int, str]]) -> np.ndarray:
+    """The rows' cells as numbers, each plain decimal (see patchgen.identify.cells)."""
+    data = np.empty((len(rows), len(names)))
+    for r, (line, ln) in enumerate(rows):
+        cells = ln.split(",")
+        if len(cells) < len(names):
+            raise InputError(source, names[len(cells)], f"line {line}: missing: the line holds {len(cells)} of the "
+                                                        f"{len(names)} values the header names")
+        if len(cells) > len(names):
+            raise InputError(source, names[-1], f"line {line}: {len(cells)} values, the header names {len(names)} "
+                                                f"(a value after {names[-1]}, the last column)")
+        for c, cell in enumerate(cells):
+            v = plain_number(cell)
+            if v is None:
+                shown = cell.strip(" \t")
+                shown = shown if len(shown) <= 40 else shown[:37] + "..."
+                raise InputError(source, names[c], f"line {line}: {shown!r} is not {not_plain(shown)}")
+            data[r, c] = v
+    for c, n in enumerate(names):
+        parts = split_column(n)
+        problem = unit_problem(parts[1], data[:, c]) if parts else None
+        if problem:
+            raise InputError(source, n, f"line {rows[problem[0]][0]}: {problem[1]}")
+    return data
 
 
 def _check_clock(rec: Recording) -> None:
@@ -242,6 +302,10 @@ def _check_clock(rec: Recording) -> None:
         k = int(np.argmax(step <= 0))
         raise rec.error("t_s", f"does not rise at sample {k + 2} ({t[k]:g} s then {t[k + 1]:g} s)")
     dt = float(np.median(step))
+    top = TESTS[rec.test].max_dt
+    if not MIN_SAMPLE_INTERVAL_S <= dt <= top:
+        raise rec.error("t_s", f"the sample interval is {dt:.3g} s, outside the {MIN_SAMPLE_INTERVAL_S:g} to "
+                               f"{top:g} s a {rec.test} recording takes: is the time in seconds?")
     off = np.abs(step - dt) > CLOCK_TOLERANCE * dt
     if np.any(off):
         k = int(np.argmax(off))

@@ -49,6 +49,7 @@ def fit_calibration(rec: Recording) -> TestFit:
         if np.unique(x).size < 3:
             raise rec.error(ref, f"{np.unique(x).size} distinct settings: a calibration needs at least three, "
                                  "spread over the range the sensor is used in")
+        _unclipped(rec, col, ref, x, v)
         X = np.column_stack([x, np.ones_like(x)])
         coef, *_ = np.linalg.lstsq(X, v, rcond=None)
         resid = v - X @ coef
@@ -65,6 +66,17 @@ def fit_calibration(rec: Recording) -> TestFit:
         panels.append(Panel(x[order], v[order], (X @ coef)[order], f"{name} (V)", xlabel=f"{name} ({ref_unit})",
                             points=True))
     return TestFit(rec.source, rec.test, est, panels=panels, title="sensor calibration")
+
+
+def _unclipped(rec: Recording, col: str, ref: str, x: np.ndarray, v: np.ndarray) -> None:
+    """Refuse a calibration whose largest or smallest reading is the same voltage at two or more
+    settings: a pot or amplifier at its limit (a noisy reading never repeats to the last digit)."""
+    for end in (v.max(), v.min()):
+        settings = np.unique(x[v == end])
+        if settings.size > 1 and np.unique(v).size > 2:
+            raise rec.error(col, f"clipped: reads exactly {end:.6g} V at {settings.size} settings of {ref} "
+                                 f"({settings.min():g} to {settings.max():g}): the sensor is at its limit there; "
+                                 "calibrate within its range")
 
 
 # no sensor and no amplifier output is free of noise: a channel that is exactly a constant (or a line)

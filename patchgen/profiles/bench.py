@@ -139,6 +139,10 @@ def check_bench(bench: BenchProfile, source: str) -> None:
     """
     for key, rng in bench.uncertainty.ranges.items():
         field = f"uncertainty.{key}"
+        if key not in RANGE_FIELDS and isinstance(rng, dict) and any(f"{key}.{k}" in RANGE_FIELDS for k in rng):
+            sub = next(k for k in rng if f"{key}.{k}" in RANGE_FIELDS)
+            raise InputError(source, field, f"a table, not a range: TOML reads {key}.{sub} unquoted as a table; "
+                                            f'write the key quoted, "{key}.{sub}" = [low, high]')
         if key not in RANGE_FIELDS:
             raise InputError(source, field, "not a parameter of the bench (its parameters: "
                              + ", ".join(RANGE_FIELDS) + "; the plant's are the spec's, spread with --spread)")

@@ -42,7 +42,7 @@ def test_column_names_split_at_the_longest_quantity():
     (("# test = actuator_step\n", ""), "test", "first line names the test"),
     (("0.100, 0.0, 2.0", "0.100, 0.0, abc"), "force_N", "line 24: 'abc' is not a number"),
     (("0.100, 0.0, 2.0", "0.100, 0.0, nan"), "force_N", "not a finite number"),
-    (("0.100, 0.0, 2.0", "0.100, 0.0"), "line 24", "2 values"),
+    (("0.100, 0.0, 2.0", "0.100, 0.0"), "force_N", "line 24: missing: the line holds 2 of the 3 values"),
     (("0.100, 0.0, 2.0", "0.1015, 0.0, 2.0"), "t_s", "sample interval"),
 ])
 def test_each_fault_is_one_line_naming_the_column(change, field, words):

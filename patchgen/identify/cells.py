@@ -1,0 +1,101 @@
+"""The numbers in a recording: plain decimal notation only, and within what a bench can show.
+
+A cell is ``[+-]digits[.digits][e[+-]digits]`` (ASCII, surrounded by spaces or tabs at most).
+Python's ``float`` also reads ``1_000``, ``nan``, ``infinity`` and non-ASCII digits, and a TOML
+file may write ``0x10``, ``1_000`` or ``inf``: none of them is how a recorder writes a sample, and
+``-0_3488`` read as -3488 would be a wrong mark, not an error, so all are refused.
+
+Each unit has a plausible bound on the size of a sample (``LIMITS``): the bench is an analog
+computer, a cart on a one-metre track and a force gauge. A number beyond it is a unit slip or a
+corrupt file, and refusing it keeps every sum of squares finite. A channel whose largest sample is
+below ``RESOLUTION`` of its unit holds nothing a sensor could resolve.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+PLAIN = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+
+# unit -> (largest |sample|, why): generous beside the bench, far inside what sums of squares hold
+LIMITS = {
+    "V": (1e3, "a kilovolt: no analog computer or sensor of the bench reads more"),
+    "N": (1e4, "ten kilonewtons: a tonne's weight, beyond any cart's force gauge"),
+    "m": (20.0, "twenty metres: the longest track a plant takes"),
+    "rad": (2 * math.pi, "a full turn: every protractor mark lies within it"),
+    "s": (1e6, "a million seconds: eleven days"),
+}
+RESOLUTION = 1e-9  # of the unit: a channel that never reaches a nanovolt (nanonewton, ...) holds no signal
+MIN_SAMPLE_INTERVAL_S = 1e-6  # 1 MHz: faster than any bench recorder
+
+
+def plain_number(cell: str) -> float | None:
+    """The value of a cell in plain decimal notation, else None."""
+    text = cell.strip(" \t")
+    return float(text) if PLAIN.fullmatch(text) else None
+
+
+def not_plain(text: str) -> str:
+    """What a cell that is not a plain number is not: a finite number (nan, inf) or plain notation."""
+    try:
+        finite = math.isfinite(float(text))
+    except ValueError:
+        finite = True
+    return ("a finite number" if not finite else
+            "a number in plain decimal notation (digits, one point, an optional exponent)")
+
+
+def unit_problem(unit: str, x: np.ndarray) -> tuple[int, str] | None:
+    """The first sample beyond its unit's bound and what is wrong with it (None: all within)."""
+    limit, why = LIMITS.get(unit, (None, ""))
+    big = float(np.max(np.abs(x))) if x.size else 0.0
+    if limit is not None and big > limit:
+        k = int(np.argmax(np.abs(x) > limit))
+        return k, f"{x[k]:.4g} {unit} is beyond {limit:g} {unit} ({why}): a unit slip or a corrupt file?"
+    return None
+
+
+def signal_problem(unit: str, x: np.ndarray) -> str | None:
+    """A channel used for a fit whose every sample is below RESOLUTION of its unit (None: it has one)."""
+    big = float(np.max(np.abs(x))) if x.size else 0.0
+    if 0 < big < RESOLUTION:
+        return (f"every sample is below {RESOLUTION:g} {unit} (largest {big:.3g}): no sensor resolves that; "
+                "is the column in another unit?")
+    return None
+
+
+CLIP_RUN = 5  # samples held at exactly the extreme that make a flat top ...
+CLIP_CONTRAST = 3  # ... when no value inside the range is held a third as long
+
+
+def _runs(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Runs of equal consecutive samples: (start, length, value)."""
+    edge = np.flatnonzero(np.diff(x) != 0) + 1
+    start = np.concatenate([[0], edge])
+    length = np.diff(np.concatenate([start, [x.size]]))
+    return start, length, x[start]
+
+
+def flat_top(x: np.ndarray, settles: bool = False) -> tuple[int, int, float] | None:
+    """A clipped channel's longest flat top: (first sample, samples held, value), else None.
+
+    A measured voltage or force carries noise, so it never repeats its largest (or smallest) value
+    sample after sample unless a recorder or amplifier held it at its limit. A run at the extreme is
+    a flat top when it lasts CLIP_RUN samples and no interior value (a coarse converter's level) is
+    held a CLIP_CONTRAST-th as long. With ``settles`` (a cart that comes to rest at the end of its
+    coast, read by a coarse converter) a run that ends the recording does not count."""
+    if x.size < 2 * CLIP_RUN or x.min() == x.max():
+        return None  # a constant channel is refused as one (patchgen.identify.sensors)
+    start, length, value = _runs(x)
+    inner = (value > x.min()) & (value < x.max())
+    longest_inner = int(length[inner].max()) if np.any(inner) else 0
+    at_edge = ~inner & ((start + length < x.size) | (not settles))
+    if not np.any(at_edge):
+        return None
+    k = int(np.argmax(np.where(at_edge, length, 0)))
+    if length[k] >= CLIP_RUN and length[k] >= CLIP_CONTRAST * longest_inner:
+        return int(start[k]), int(length[k]), float(value[k])
+    return None

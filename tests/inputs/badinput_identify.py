@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .badinput_cases import DIRECTORY, FIFO, PKG, SPEC, Case
+from .badinput_cases import DIRECTORY, FIFO, ROOT, SPEC, Case
 from .badinput_options import GOOD_SCENARIO, GOOD_SPEC
 from .badinput_recordings import REC, _case, _rows, _with_column, _write, good_files
 
@@ -118,7 +118,7 @@ def _file_cases(g: dict[str, str]) -> list[Case]:
 
 def _spread_cases() -> list[Case]:
     """Bench profiles whose [uncertainty] is wrong, given to simulate --bench-spread and bench-test --bench."""
-    uw = (PKG / "profiles" / "benches" / "uw-1991.toml").read_text()
+    uw = (ROOT / "patchgen" / "profiles" / "benches" / "uw-1991.toml").read_text()
     bench = "@TMP@/b.toml"
     sim = ("simulate", SPEC, "--scenario", "@TMP@/sc.toml", "--bench", bench, "--bench-spread", "-o", "@TMP@/out")
     bt = ("bench-test", SPEC, "--bench", bench, "-o", "@TMP@/out")

@@ -46,9 +46,9 @@ FILES = ("masses.toml", "calibration.csv", "actuator-step.csv", "actuator-ramp.c
 
 def _csv(test: str, header: tuple[str, ...], cols: list[np.ndarray], about: str) -> bytes:
     lines = [f"# test = {test}", f"# {about}", ", ".join(header)]
-    fmt = ["{:.10g}" if h == "t_s" else "{:.7g}" for h in header]
-    for row in zip(*cols):
-        lines.append(", ".join(f.format(float(v)) for f, v in zip(fmt, row)))
+    row = ", ".join("%.10g" if h == "t_s" else "%.7g" for h in header)
+    data = np.column_stack([np.asarray(c, dtype=float) for c in cols]).tolist()
+    lines.extend(row % tuple(r) for r in data)  # one format per row: the same text as cell by cell
     return ("\n".join(lines) + "\n").encode()
 
 

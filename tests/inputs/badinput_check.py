@@ -107,5 +107,28 @@ def readings_cases() -> list[Case]:
     return out
 
 
+def scenario_time_cases() -> list[Case]:
+    """Times a scenario allows alone that make no simulation: a run of less than a few steps."""
+    cases = {
+        "duration-1e-300": ("duration_s = 1e-300\n", "duration_s"),
+        "duration-1e-22": ("duration_s = 1e-22\n", "duration_s"),
+        "duration-one-step": ("duration_s = 0.01\n", "duration_s"),
+        "duration-below-dt": ("duration_s = 0.01\ndt_s = 0.005\n", "duration_s"),
+        "duration-tiny-with-dt": ("duration_s = 1e-12\ndt_s = 1e-6\n", "duration_s"),
+        "duration-tiny-record": ("duration_s = 1e-300\nrecord_dt_s = 1e-6\n", "duration_s"),
+        "duration-tiny-push": ("duration_s = 1e-9\n[[disturbances]]\nkind = 'force_impulse'\ntime_s = 0.0\n"
+                               "duration_s = 1e-10\nforce_N = 1.0\nat = 'cart'\n", "duration_s"),
+    }
+    sim = ("simulate", "bench-recommended", "--scenario", "@TMP@/sc.toml", "-o", "@TMP@/out", "--runs", "1")
+    out = [Case(f"check-scenario-{k}", sim, "@TMP@/sc.toml", f, {"sc.toml": t}) for k, (t, f) in cases.items()]
+    for cmd, argv in (("spice", ("spice", "bench-recommended", "--scenario", "@TMP@/sc.toml", "-o", "@TMP@/out")),
+                      ("recommend", ("recommend", "bench-recommended", "--scenario", "@TMP@/sc.toml", "-o",
+                                     "@TMP@/out", "--runs", "1")),
+                      ("sweep", ("sweep", "bench-recommended", "--scenario", "@TMP@/sc.toml"))):
+        out.append(Case(f"check-scenario-{cmd}-duration-1e-300", argv, "@TMP@/sc.toml", "duration_s",
+                        {"sc.toml": "duration_s = 1e-300\n"}))
+    return out
+
+
 def check_cases() -> list[Case]:
-    return readings_cases()
+    return readings_cases() + scenario_time_cases()

@@ -11,7 +11,8 @@ import csv
 import functools
 import io
 
-from .badinput_cases import DIRECTORY, FIFO, LOOP, Case
+from .badinput_cases import DIRECTORY, FIFO, KAL, LAG, LOOP, SPEC, Case, patch_argv, shipped
+from .badinput_toml import dumps, with_field
 
 READ = "@TMP@/r.csv"
 
@@ -130,5 +131,58 @@ def scenario_time_cases() -> list[Case]:
     return out
 
 
+def _lag_zero(zero: float) -> dict:
+    lz = with_field(with_field(KAL, "actuator.model", "lag_zero"), "actuator.tau", 0.2)
+    return with_field(with_field(lz, "actuator.zero", zero), "weights.Q.actuator", 1.0)
+
+
+def _few_inputs(x1: int, x10: int) -> str:
+    """The GP-6 profile with every amplifier's inputs cut to x1 and x10."""
+    gp6 = shipped("profiles/machines", "gp6")
+    for a in gp6["amplifiers"]:
+        a["inputs"] = {"x1": x1, "x10": x10}
+    return dumps(gp6)
+
+
+def design_cases() -> list[Case]:
+    """Finite values each field allows that no design can use: blamed on the field, not the machine."""
+    sim = ("simulate", SPEC, "--scenario", "offset-10deg", "-o", "@TMP@/out", "--runs", "1")
+    rho = lambda v: with_field(KAL, "estimator.rho", v)  # noqa: E731
+    cases = {  # name -> (spec, field, argv)
+        "rho-1e-300": (rho(1e-300), "estimator.rho", patch_argv()),
+        "rho-1e-300-design": (rho(1e-300), "estimator.rho", ("design", SPEC)),
+        "rho-1e-300-simulate": (rho(1e-300), "estimator.rho", sim),
+        "rho-1e-30": (rho(1e-30), "estimator.rho", patch_argv()),
+        "rho-1e-16": (rho(1e-16), "estimator.rho", patch_argv()),
+        "rho-1e-12": (rho(1e-12), "estimator.rho", patch_argv()),
+        "rho-1e-9": (rho(1e-9), "estimator.rho", patch_argv()),
+        "W-zero": (with_field(KAL, "estimator.W", 0.0), "estimator.W", patch_argv()),
+        "W-zero-matrix": (with_field(KAL, "estimator.W", [[0.0]]), "estimator.W", ("design", SPEC)),
+        "W-1e-300": (with_field(KAL, "estimator.W", 1e-300), "estimator.rho", patch_argv()),
+        "W-huge": (with_field(KAL, "estimator.W", 1e12), "estimator.rho", ("design", SPEC)),
+        "Gamma-zero": (with_field(KAL, "estimator.Gamma", [0.0, 0.0, 0.0, 0.0]), "estimator.Gamma", patch_argv()),
+        "Gamma-huge": (with_field(KAL, "estimator.Gamma", [1e6] * 4), "estimator.rho", ("design", SPEC)),
+        "rho_max-1e-300": (with_field(rho("auto"), "estimator.rho_max", 1e-300), "estimator.rho_max",
+                           patch_argv()),
+        "rho_max-half": (with_field(rho("auto"), "estimator.rho_max", 0.5), "estimator.rho_max", ("design", SPEC)),
+        "zero-1e-300": (_lag_zero(1e-300), "actuator.zero", patch_argv()),
+        "zero-1e-300-design": (_lag_zero(1e-300), "actuator.zero", ("design", SPEC)),
+        "zero-1e-9": (_lag_zero(1e-9), "actuator.zero", patch_argv()),
+        "int_s_leak-1": (with_field(KAL, "integrators.int_s_leak", 1.0), "integrators.int_s_leak", patch_argv()),
+        "int_theta_leak-0.5": (with_field(KAL, "integrators.int_theta_leak", 0.5), "integrators.int_theta_leak",
+                               patch_argv()),
+        "compensator-of-a-differentiator": (with_field(LAG, "patch.realization", "compensator"),
+                                            "patch.realization", patch_argv()),
+    }
+    out = [Case(f"check-design-{k}", argv, SPEC, f, {"spec.toml": dumps(d)}) for k, (d, f, argv) in cases.items()]
+    # a patch that does not fit the machine: the spec (the design that asks too much) is named
+    for name, (x1, x10, base) in {"no-x10-inputs": (4, 0, LAG), "one-x10-input": (3, 1, LAG),
+                                  "one-x1-input": (1, 2, shipped("designs", "thesis-ch5"))}.items():
+        spec = dumps(with_field(base, "machine", "@TMP@/m.toml"))
+        out.append(Case(f"check-design-machine-{name}", patch_argv(), SPEC, "machine",
+                        {"spec.toml": spec, "m.toml": _few_inputs(x1, x10)}))
+    return out
+
+
 def check_cases() -> list[Case]:
-    return readings_cases() + scenario_time_cases()
+    return readings_cases() + scenario_time_cases() + design_cases()

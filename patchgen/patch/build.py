@@ -9,7 +9,7 @@ from patchgen.patch.allocation import allocate
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.parts import parts_for
 from patchgen.patch.realization import realize
-from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.machine import MachineProfile, the_machine
 
 
 def build_patch(design: Design, machine: MachineProfile, units: int | str | None = None) -> Netlist:
@@ -82,7 +82,7 @@ def no_fit_line(tried: list, machine: MachineProfile, cap: int) -> str:
                     f"the nearest, order {f.order} in {f.form} form, reaches {f.peak_fraction:.2f} of the reference")
         return "no realisation of the compensator at this order keeps the loop stable"
     f = short[0]
-    return (f"no realisation fits {cap} unit(s) of the {machine.name}; the smallest tried, order {f.order} "
+    return (f"no realisation fits {cap} unit(s) of {the_machine(machine.name)}; the smallest tried, order {f.order} "
             f"({f.method}) in {f.form} form: {f.error}")
 
 

@@ -12,8 +12,10 @@ from rich.markup import escape
 from rich.table import Table
 
 from patchgen.design.lqg import design_on
+from patchgen.inputs.errors import InputError
 from patchgen.patch.build import build_patch
-from patchgen.patch.fault_finding import diagnose_readings, load_readings
+from patchgen.patch.fault_finding import diagnose_readings
+from patchgen.patch.readings import load_readings
 from patchgen.patch.static_check import static_check
 
 from . import cli
@@ -33,10 +35,12 @@ def check_cmd(spec: str, readings_path: str, as_json: bool) -> None:
     Exit 0 when every reading agrees with its expected value within its tolerance, 1 when not
     (with the single faults that explain the readings best, ranked), 2 for a bad readings file.
     """
+    if not readings_path:
+        raise InputError("--readings", "", "is an empty file name: give the filled static-check.csv")
     sp, machine, bench = load_inputs(spec)
     net = build_patch(design_on(sp, machine, bench), machine)
     check = static_check(net, machine)
-    measured = load_readings(readings_path, check)
+    measured = load_readings(readings_path, check, machine)
     verdict = diagnose_readings(net, machine, check, measured)
     if as_json:
         click.echo(json.dumps({

@@ -108,8 +108,14 @@ def compensator(design: Design) -> Compensator:
     if ints:
         A11, A12, A21, A22 = (A[np.ix_(rest, rest)], A[np.ix_(rest, ints)], A[np.ix_(ints, rest)],
                               A[np.ix_(ints, ints)])
-        if np.abs(A21).max(initial=0.0) > 0 or np.abs(np.linalg.eigvals(A22)).max() > INTEGRATOR_POLE:
+        if np.abs(A21).max(initial=0.0) > 0:
             raise ValueError("the integral states are not integrators of the measurements alone")
+        for name in (ctl.states[i] for i in ints):
+            leak = getattr(design.spec.integrators, f"{name}_leak")
+            if leak > INTEGRATOR_POLE:
+                raise design.spec.error(f"integrators.{name}_leak", f"a leak of {leak:g} 1/s: the compensator's "
+                                        f"integral part is patched as pure integrators, which it is only up to "
+                                        f"{INTEGRATOR_POLE:g} 1/s (realization = 'states' leaves a leak out)")
         # z = x1 + X x2 decouples them: A11 X - X A22 = A12
         X = sla.solve_sylvester(A11, -A22, A12)
         B1 = B[rest] + X @ B[ints]

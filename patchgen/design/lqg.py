@@ -18,6 +18,7 @@ from patchgen.design.model import LinearModel, build_model, open_loop_poles, pla
 from patchgen.design.numerics import failing_as
 from patchgen.design.observer import ObserverError, reduced_observer, reduced_observer_controller
 from patchgen.design.precision import GainSpread, gain_spread
+from patchgen.inputs.errors import InputError
 from patchgen.inputs.spec import DesignSpec, q_matrix, r_matrix
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
@@ -31,6 +32,7 @@ RHO_STEP = 10.0  # rho = 1, 10, 100, ...: powers of ten (docs/spec.md; the thesi
 RHO_MAX_SLACK = 1e-9  # relative: rho_max = 1e7 still admits 10^7 computed as a float power
 STABLE_TOL = 1e-12  # a mode with real part above -1e-12 1/s counts as not decaying (rounding)
 RANK_TOL = 1e-9  # the PBH rank test's singular-value cut-off for "the input cannot move this mode"
+ZERO_OFF_AXIS = 1e-8  # rad/s: a lag_zero's zero nearer the origin cancels the cart's pole to RANK_TOL
 
 
 @dataclass(frozen=True)
@@ -90,9 +92,11 @@ def lqr(spec: DesignSpec, model: LinearModel) -> tuple[np.ndarray, np.ndarray, n
     Q, R = q_matrix(spec), r_matrix(spec)
     A, B = model.A, model.B
     if not _stabilisable(A, B):
-        if spec.actuator.model == "lag_zero" and spec.actuator.zero == 0:
-            raise spec.error("actuator.zero", "a zero exactly at the origin cancels the cart's position pole, "
-                             "so the model is not stabilisable; move it off the axis (e.g. 1e-5)")
+        z = spec.actuator.zero
+        if spec.actuator.model == "lag_zero" and z < ZERO_OFF_AXIS:
+            where = "exactly at the origin" if z == 0 else f"at {z:g} rad/s, this close to the origin,"
+            raise spec.error("actuator.zero", f"a zero {where} cancels the cart's position pole, so the model is "
+                             f"not stabilisable; move it off the axis (at least {ZERO_OFF_AXIS:g}; the default 1e-5)")
         raise spec.error(*_unstabilisable_part(spec, model))
     ev, vec = np.linalg.eigh((Q + Q.T) / 2)
     H = (vec * np.sqrt(np.clip(ev, 0, None))) @ vec.T
@@ -133,20 +137,25 @@ def _filter_inputs(spec: DesignSpec, model: LinearModel, rho: float) -> tuple[np
     return Ae, Ce, (Qn + Qn.T) / 2, V
 
 
-def kalman_gain(spec: DesignSpec, model: LinearModel, rho: float) -> np.ndarray:
-    """Steady-state Kalman gain for the estimated states from s, theta, s_dot, W scaled by rho."""
+def kalman_gain(spec: DesignSpec, model: LinearModel, rho: float, field: str = "estimator.rho") -> np.ndarray:
+    """Steady-state Kalman gain for the estimated states from s, theta, s_dot, W scaled by rho; a
+    filter that cannot be had at this rho is refused naming ``field``."""
     Ae, Ce, Qn, V = _filter_inputs(spec, model, rho)
     n = Ae.shape[0]
     if not _stabilisable(Ae.T, Ce.T):
         raise spec.error("estimator", "the estimated model is not detectable from s, theta, s_dot")
+    ratio = np.abs(Qn).max() / np.abs(V).max()  # process noise against measurement noise
+    little = ("rho x W puts so much process noise on the model against V that the filter is beyond computing "
+              "(a smaller rho or W)" if ratio > 1 else "rho x W puts too little process noise on the model to move "
+              "the plant's poles off the axis (a larger rho or W)")
     try:
         P = sla.solve_continuous_are(Ae.T, Ce.T, Qn, V)
     except (np.linalg.LinAlgError, ValueError) as exc:
-        raise spec.error("estimator",
-                         f"the estimator Riccati equation has no solution at rho = {rho:g} ({exc})") from None
+        raise spec.error(field, f"the estimator Riccati equation has no solution at rho = {rho:g} ({exc}): "
+                         f"{little}") from None
     L = _filter_gain(Ae, Ce, Qn, V, P)
     if not np.all(np.isfinite(L)) or np.max(np.linalg.eigvals(Ae - L @ Ce).real) >= 0 or L.shape[0] != n:
-        raise spec.error("estimator", f"the Kalman filter is not stable at rho = {rho:g}")
+        raise spec.error(field, f"the Kalman filter is not stable at rho = {rho:g}: {little}")
     return L
 
 
@@ -329,21 +338,23 @@ def _estimator(spec: DesignSpec, bench: BenchProfile | None, model: LinearModel,
     return None, None, None
 
 
-def _kalman_margins(spec: DesignSpec, model: LinearModel, K: np.ndarray, rho: float):
+def _kalman_margins(spec: DesignSpec, model: LinearModel, K: np.ndarray, rho: float, field: str = "estimator.rho"):
     """The Kalman gain at ``rho`` and the loop margins of its compensator."""
-    L = kalman_gain(spec, model, rho)
+    L = kalman_gain(spec, model, rho, field)
     return L, loop_margins(*loop_with_controller(model, kalman_controller(model, K, L)))
 
 
 def _kalman_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray, lqr_m: Margins):
     """The Kalman estimator after loop transfer recovery: rho from the spec, or the first power
-    of RHO_STEP whose loop is close enough to the LQR loop (up to the spec's rho_max)."""
+    of RHO_STEP whose loop is close enough to the LQR loop (up to the spec's rho_max). The
+    filter at rho = 1 gives the report's loop before recovery (left out when there is none)."""
     e = spec.estimator
     tries: list[RhoTry] = []
-    L1, m1 = _kalman_margins(spec, model, K, 1.0)
     if e.rho == "auto":
-        rho, L, m = 1.0, L1, m1
-        k = 0
+        field = "estimator.W"  # the search starts at rho = 1: W (through Gamma) is the noise it starts from
+        rho, k = 1.0, 0
+        L, m = _kalman_margins(spec, model, K, rho, field)
+        m1 = m
         while True:
             ok = _close_enough(m, lqr_m)
             tries.append(RhoTry(rho=rho, margins=m, accepted=ok))
@@ -351,15 +362,23 @@ def _kalman_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray, lqr_m
                 break
             k += 1
             rho = RHO_STEP ** k
-            L, m = _kalman_margins(spec, model, K, rho)
+            L, m = _kalman_margins(spec, model, K, rho, field)
     else:
-        rho = float(e.rho)
-        L, m = _kalman_margins(spec, model, K, rho)
+        field, rho = "estimator.rho", float(e.rho)
+        L, m = _kalman_margins(spec, model, K, rho, field)
         tries.append(RhoTry(rho=rho, margins=m, accepted=_close_enough(m, lqr_m)))
+        m1 = m if rho == 1.0 else _margins_at_rho1(spec, model, K)
     Ae, _, Ce = model.submodel(model.estimated)
     est = Estimator(kind="kalman", states=model.estimated, L=L, poles=_sort(np.linalg.eigvals(Ae - L @ Ce)),
                     rho=rho, rho_tries=tries, margins_rho1=m1)
     return est, kalman_controller(model, K, L), m
+
+
+def _margins_at_rho1(spec: DesignSpec, model: LinearModel, K: np.ndarray) -> Margins | None:
+    try:  # no filter at rho = 1: the report leaves the loop before recovery out
+        return _kalman_margins(spec, model, K, 1.0)[1]
+    except InputError:
+        return None
 
 
 def _noise_shaped_estimator(spec: DesignSpec, bench: BenchProfile, model: LinearModel, K: np.ndarray):

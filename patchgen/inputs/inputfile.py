@@ -41,8 +41,10 @@ def _os_problem(exc: OSError) -> str:
     return f"cannot be read ({exc.strerror or exc})"
 
 
-def read_bytes(path: str | Path | Traversable, named_by: tuple[str, str, str] | None = None) -> bytes:
-    """The bytes of a regular file of at most MAX_INPUT_BYTES (a shipped resource is read as is).
+def read_bytes(path: str | Path | Traversable, named_by: tuple[str, str, str] | None = None, *,
+               limit: int = MAX_INPUT_BYTES, kind: str = "a TOML file",
+               too_large: str = "not a spec, scenario or profile") -> bytes:
+    """The bytes of a regular file of at most ``limit`` bytes (a shipped resource is read as is).
 
     Parameters
     ----------
@@ -53,6 +55,10 @@ def read_bytes(path: str | Path | Traversable, named_by: tuple[str, str, str] | 
         profile: a path that cannot be used (missing, a directory, a FIFO, unreadable) is then
         named against that field, which is what to fix. What is read (too large) names the path
         itself.
+    limit : int
+        The largest file accepted, in bytes.
+    kind, too_large : str
+        What the file should be ("a TOML file"), and what a file over ``limit`` is not.
 
     Returns
     -------
@@ -81,31 +87,35 @@ def read_bytes(path: str | Path | Traversable, named_by: tuple[str, str, str] | 
     if "\0" in p:
         raise refuse("cannot be read (a file name cannot contain a NUL character)")
     try:
-        kind = _kind(os.stat(p).st_mode)
+        found = _kind(os.stat(p).st_mode)
     except OSError as exc:
         raise refuse(_os_problem(exc)) from None
-    if kind is not None:
-        raise refuse(f"is {kind}, not a TOML file")
+    if found is not None:
+        raise refuse(f"is {found}, not {kind}")
     try:
         fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     except OSError as exc:
         raise refuse(_os_problem(exc)) from None
     try:
-        kind = _kind(os.fstat(fd).st_mode)
-        if kind is not None:
-            raise refuse(f"is {kind}, not a TOML file")
+        found = _kind(os.fstat(fd).st_mode)
+        if found is not None:
+            raise refuse(f"is {found}, not {kind}")
         with os.fdopen(fd, "rb", closefd=False) as fh:
-            data = fh.read(MAX_INPUT_BYTES + 1)
+            data = fh.read(limit + 1)
     except OSError as exc:
         raise refuse(_os_problem(exc)) from None
     finally:
         os.close(fd)
-    if len(data) > MAX_INPUT_BYTES:
-        raise InputError(p, "", f"is larger than {MAX_INPUT_BYTES >> 20} MiB: not a spec, scenario or profile")
+    if len(data) > limit:
+        raise InputError(p, "", f"is larger than {_size(limit)}: {too_large}")
     return data
 
 
-def decode_text(data: bytes, source: str) -> str:
+def _size(n: int) -> str:
+    return f"{n >> 20} MiB" if n >= 1 << 20 else f"{n >> 10} kB"
+
+
+def decode_text(data: bytes, source: str, kind: str = "a TOML file") -> str:
     """UTF-8 text (a leading byte-order mark is dropped); other encodings and binary data are named."""
     try:
         text = data.decode("utf-8")
@@ -115,5 +125,5 @@ def decode_text(data: bytes, source: str) -> str:
                                      "(save the file as UTF-8)") from None
     if "\0" in text:
         line = text[:text.index("\0")].count("\n") + 1
-        raise InputError(source, "", f"binary data, not a TOML file (a NUL byte on line {line})")
+        raise InputError(source, "", f"binary data, not {kind} (a NUL byte on line {line})")
     return text.removeprefix("\ufeff")

@@ -27,6 +27,8 @@ MAX_FORCE_N = 1e4  # a push: far beyond the 15 N the bench's actuator gives
 DT_RANGE_S = (1e-6, 0.05)  # the engine's step: at most a quarter of the bench actuator's 0.2 s lag
 RECORD_DT_RANGE_S = (1e-6, 1e3)  # history sample interval
 RECORD_DT_S = 0.01  # default history sample interval: 100 samples a second, enough for the plots
+MIN_RUN_STEPS = 5  # a run shorter than a few steps shows nothing (and its history's stride would overflow)
+COARSEST_STEP_S = 0.01  # the engine's coarsest own step (patchgen.bench.engine.IDEAL_DT_S) when dt_s is not given
 FALL_ANGLE_DEG = 30.0  # default: three times the 10 deg the standard scenarios start from
 MAX_DISTURBANCES = 1000  # disturbances in one scenario: far more than any experiment has
 SEED_LIMIT = 2**63  # a seed is a non-negative signed 64-bit integer, as the simulator checks too
@@ -169,11 +171,17 @@ def load_scenario(path: str | Path) -> Scenario:
     Raises
     ------
     InputError
-        Any problem with the file or a field (a disturbance after the end among them).
+        Any problem with the file or a field (a run shorter than MIN_RUN_STEPS steps, a
+        disturbance after the end among them).
     """
     sc = validate(Scenario, read_toml(resolve("scenario", path)), str(path))
     sc = sc if sc.name else sc.model_copy(update={"name": Path(str(path)).stem})
     sc._path = str(path)
+    step = sc.dt_s or COARSEST_STEP_S
+    if sc.duration_s < MIN_RUN_STEPS * step:
+        of = f"dt_s = {step:g} s" if sc.dt_s else f"the simulator's own step, up to {step:g} s"
+        raise InputError(sc.path, "duration_s", f"{sc.duration_s:g} s is shorter than {MIN_RUN_STEPS} simulation "
+                         f"steps ({of}): at least {MIN_RUN_STEPS * step:g} s")
     for i, d in enumerate(sc.disturbances):
         if d.time_s >= sc.duration_s:
             raise InputError(sc.path, f"disturbances[{i}].time_s", f"{d.time_s:g} s is not before the end of "

@@ -355,6 +355,15 @@ def _check_kalman(spec: DesignSpec, n_est: int) -> None:
         raise err("estimator.W", f"must be {n_w}x{n_w} to match Gamma (got {W.shape[0]}x{W.shape[1]})")
     if np.linalg.eigvalsh((W + W.T) / 2).min() < 0:
         raise err("estimator.W", "must be positive semi-definite")
+    if not W.any():
+        raise err("estimator.W", "W = 0 puts no process noise on the model: the filter could not move the cart's "
+                                 "pole at the origin (W must not be 0)")
+    if not isinstance(e.Gamma, str) and not G.any():
+        raise err("estimator.Gamma", "a zero matrix puts no process noise on the model: the filter could not move "
+                                     "the cart's pole at the origin")
+    if e.rho == "auto" and e.rho_max < 1:
+        raise err("estimator.rho_max", f"rho = 'auto' searches rho = 1, 10, 100, ...: rho_max = {e.rho_max:g} would "
+                                       "stop it before its first step (at least 1, or give rho itself)")
     if e.V and isinstance(e.V[0], list):
         V = matrix(e.V, "estimator.V", err)
     else:

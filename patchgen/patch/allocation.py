@@ -25,7 +25,7 @@ from patchgen.inputs.errors import ResourceError
 from patchgen.patch import large_gains
 from patchgen.patch.netlist import AmpInput, Amplifier, ControlOutput, Netlist, Pot, SensorInput, Signal
 from patchgen.patch.realization import SENSOR_LABELS, SENSOR_UNITS, Block, Realization, Term
-from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.machine import MachineProfile, the_machine
 
 ROLE = {"sum": "summer", "integrate": "integrator", "differentiate": "differentiator", "lag": "lag"}
 SLOT_ROLE = {"summer": "summer", "inverter": "inverter", "integrator": "integrator",
@@ -219,7 +219,7 @@ def _place(real: Realization, blocks: list[Block], kept: dict[str, list[Term]], 
     for sig in sorted(inverted):
         stages.insert(0, _Stage(f"inv:{sig}", "inverter", ((sig, None, 1.0),), sig, -P.get(sig, 1), None))
     _check_resources(stages, machine, source)
-    return _emit(real, machine, stages, P, notes, wanted)
+    return _emit(real, machine, stages, P, notes, wanted, source)
 
 
 def _unit_inverters(blocks: list[Block], kept: dict[str, list[Term]], P: dict[str, int], inverted: set[str],
@@ -251,7 +251,7 @@ def _check_lower_bound(blocks: list[Block], kept: dict[str, list[Term]], machine
     if need_int > have_int or need_amp > have_amp or need_pot > machine.pot_count:
         raise ResourceError(source, "machine",
                             f"the patch needs at least {need_amp} amplifiers ({need_int} integrators) and {need_pot} "
-                            f"pots; the {machine.name} has {have_amp} amplifiers ({have_int} integrators) and "
+                            f"pots; {the_machine(machine.name)} has {have_amp} amplifiers ({have_int} integrators) and "
                             f"{machine.pot_count} pots")
 
 
@@ -265,7 +265,7 @@ def _check_resources(stages: list[_Stage], machine: MachineProfile, source: str)
     if short:
         raise ResourceError(source, "machine",
                             f"the patch needs {need_amp} amplifiers ({need_int} integrators) and {need_pot} pots; "
-                            f"the {machine.name} has {have_amp} amplifiers ({have_int} integrators) and "
+                            f"{the_machine(machine.name)} has {have_amp} amplifiers ({have_int} integrators) and "
                             f"{machine.pot_count} pots")
 
 
@@ -279,7 +279,7 @@ def _needs_pot(mag: float, machine: MachineProfile) -> bool:
     return not any(math.isclose(mag, w, rel_tol=1e-12) for w in machine.input_weights)
 
 
-def _assign_slots(stages: list[_Stage], machine: MachineProfile) -> dict[str, str]:
+def _assign_slots(stages: list[_Stage], machine: MachineProfile, source: str) -> dict[str, str]:
     """Most constrained first: integrators and lags on integrator slots, then the rest on slots
     that cannot integrate, keeping integrators free."""
     free = list(machine.amplifiers)
@@ -291,15 +291,16 @@ def _assign_slots(stages: list[_Stage], machine: MachineProfile) -> dict[str, st
         fits = [a for a in free if want in a.roles]
         fits.sort(key=lambda a: ("integrator" in a.roles and want != "integrator", len(a.roles)))
         if not fits:
-            raise ResourceError("<machine>", "machine", f"no free amplifier can be a {want} for {st.key}")
+            raise ResourceError(source, "machine", f"no free amplifier of {the_machine(machine.name)} can be a "
+                                f"{want} for {st.key}")
         out[st.key] = fits[0].id
         free.remove(fits[0])
     return out
 
 
 def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: dict[str, int],
-          notes: list[str], wanted: dict[tuple[str, str, float], float]) -> Netlist:
-    slot = _assign_slots(stages, machine)
+          notes: list[str], wanted: dict[tuple[str, str, float], float], source: str) -> Netlist:
+    slot = _assign_slots(stages, machine, source)
     res = machine.pot_resolution
     sensors = [SensorInput(id=s, label=SENSOR_LABELS[s], quantity=s, unit=SENSOR_UNITS[s], volts_per_unit=v)
                for s, v in real.sensors.items()]
@@ -326,10 +327,9 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
             jack = f"x{w}{'abcdefgh'[used[w]]}"
             used[w] += 1
             slot_def = next(a for a in machine.amplifiers if a.id == slot[st.key])
-            if used[w] > slot_def.input_count(w):
-                raise ResourceError("<machine>", "machine",
-                                    f"amplifier {slot[st.key]} ({st.key}) needs {used[w]} x{w} inputs, has "
-                                    f"{slot_def.input_count(w)}")
+            if used[w] > (have := slot_def.input_count(w)):
+                raise ResourceError(source, "machine", f"amplifier {slot[st.key]} ({st.key}) of "
+                                    f"{the_machine(machine.name)} needs {used[w]} x{w} inputs, has {have}")
             pot_id = None
             if setting is not None:
                 pot_id = _next_pot(pots, slot[st.key], machine)

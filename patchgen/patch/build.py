@@ -9,7 +9,7 @@ from patchgen.patch.allocation import allocate
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.parts import parts_for
 from patchgen.patch.realization import realize
-from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.machine import MachineProfile, the_machine
 
 
 def build_patch(design: Design, machine: MachineProfile, units: int | str | None = None) -> Netlist:
@@ -46,11 +46,29 @@ def _place_compensator(design: Design, machine: MachineProfile, tries: list[int]
     tried = compensator_fit.fits(design, machine, tries, p.form, p.reduction, [order])
     chosen = compensator_fit.best(tried)
     if chosen is None:
+        if tried and all(f.error == compensator_fit.UNSTABLE_LAW for f in tried):
+            raise _degenerate(design, order, full)
         raise ResourceError(spec.path, "machine", no_fit_line(tried, machine, tries[-1]))
     net = chosen.netlist
     notes = list(net.notes) + [f"realisation compared: {f.line()}" for f in tried]
     net = net.model_copy(update={"description": spec.description, "notes": notes})
     return net.model_copy(update={"parts": parts_for(net, machine)})
+
+
+def _degenerate(design: Design, order: int, full: int):
+    """The design's own fault: no form of its compensator keeps the loop stable on the design model."""
+    spec, e = design.spec, design.estimator
+    what = (f"no form of the order-{order} compensator keeps the loop stable on the design model (the machine "
+            "is not tried)")
+    if order < full:
+        return spec.error("patch.order", f"{what}: the reduction drops a mode the loop needs (the minimal "
+                          f"compensator has {full} states)")
+    if e is not None and e.kind == "kalman" and spec.estimator.rho != "auto":
+        slow = -float(max(e.poles.real))
+        return spec.error("estimator.rho", f"{what}: at rho = {e.rho:g} the filter's slowest pole is at "
+                          f"-{slow:.3g} 1/s and the compensator all but cancels it; a larger rho or W")
+    return spec.error("patch.realization", f"{what}: the law as one system loses a mode the loop needs; "
+                      "realization = 'states' wires the estimator as its states")
 
 
 def no_fit_line(tried: list, machine: MachineProfile, cap: int) -> str:
@@ -64,7 +82,7 @@ def no_fit_line(tried: list, machine: MachineProfile, cap: int) -> str:
                     f"the nearest, order {f.order} in {f.form} form, reaches {f.peak_fraction:.2f} of the reference")
         return "no realisation of the compensator at this order keeps the loop stable"
     f = short[0]
-    return (f"no realisation fits {cap} unit(s) of the {machine.name}; the smallest tried, order {f.order} "
+    return (f"no realisation fits {cap} unit(s) of {the_machine(machine.name)}; the smallest tried, order {f.order} "
             f"({f.method}) in {f.form} form: {f.error}")
 
 

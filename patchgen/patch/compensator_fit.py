@@ -37,6 +37,7 @@ from patchgen.profiles.machine import MachineProfile
 
 METHODS = ("truncate", "residualise")
 SHRINK_ROUNDS = 4  # placements of one law and form while scaling down the states that overload
+UNSTABLE_LAW = "the loop with this law is unstable on the design model"  # a Fit's error: the law's own fault
 
 
 @dataclass(frozen=True)
@@ -157,7 +158,7 @@ def try_fit(design: Design, order: int, method: str, law: comp.Compensator, form
     when it fits within the reference, or comes nearer to it."""
     dm = comp.margins(design, law)
     if not dm.stable:
-        return Fit(order, method, form, law, dm, error="the loop with this law is unstable on the design model")
+        return Fit(order, method, form, law, dm, error=UNSTABLE_LAW)
     plain = _place_scaled(design, order, method, law, form, machine, units, dm, staged=False)
     if plain.netlist is not None and plain.peak_fraction <= 1.0:
         return plain

@@ -1,6 +1,7 @@
 """From a static check's readings to the likeliest wiring fault.
 
-The technician fills the ``measured_V`` column of static-check.csv. Each reading either agrees
+The technician fills the ``measured_V`` column of static-check.csv (read by
+patchgen.patch.readings). Each reading either agrees
 with its expected value within its tolerance, or the patch differs from the netlist. The fault
 model, one fault at a time, each a variation of the wiring that patchgen.patch.static_check.solve
 evaluates under the same conditions:
@@ -21,18 +22,14 @@ are reported together (``consistent``).
 
 from __future__ import annotations
 
-import csv
-import io
-import math
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from patchgen.inputs.errors import InputError
 from patchgen.patch.netlist import Netlist
-from patchgen.patch.static_check import CSV_COLUMNS, StaticCheck, Wire, solve, wires_of
+from patchgen.patch.readings import reading_limit_V
+from patchgen.patch.static_check import StaticCheck, Wire, solve, wires_of
 from patchgen.profiles.machine import MachineProfile
 
 TOP = 5  # faults reported
@@ -66,44 +63,6 @@ class Verdict:
     faults: tuple[Fault, ...]
 
 
-def load_readings(path: str | Path, check: StaticCheck) -> np.ndarray:
-    """The measured voltages of a filled static-check.csv, in the check's reading order.
-
-    Raises InputError naming the file, the row and the field for a missing file or column, a row
-    that is not one of the check's readings, a reading missing, or a measured value that is not a
-    finite number.
-    """
-    name = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(name, "", f"cannot be read ({exc.__class__.__name__}: {exc})") from None
-    reader = csv.DictReader(io.StringIO(text))
-    missing = [c for c in ("condition", "point", "measured_V") if c not in (reader.fieldnames or ())]
-    if missing:
-        raise InputError(name, "header", f"needs the columns {', '.join(CSV_COLUMNS)} (missing {', '.join(missing)})")
-    index = {(r.condition, r.point): k for k, r in enumerate(check.readings)}
-    measured = np.full(len(check.readings), np.nan)
-    for n, row in enumerate(reader, start=2):
-        key = (row["condition"], row["point"])
-        if key not in index:
-            raise InputError(name, f"row {n}", f"condition {key[0]!r}, point {key[1]!r} is not a reading of this "
-                             "patch's static check")
-        raw = (row["measured_V"] or "").strip()
-        try:
-            v = float(raw)
-        except ValueError:
-            raise InputError(name, f"row {n}: measured_V", f"must be a number of volts (got {raw!r})") from None
-        if not math.isfinite(v):
-            raise InputError(name, f"row {n}: measured_V", f"must be a finite number (got {raw!r})")
-        measured[index[key]] = v
-    if np.isnan(measured).any():
-        k = int(np.argmax(np.isnan(measured)))
-        r = check.readings[k]
-        raise InputError(name, "measured_V", f"no reading for condition {r.condition!r}, point {r.point!r}")
-    return measured
-
-
 def predict(net: Netlist, check: StaticCheck, wires: list[Wire], rail: float | None = None) -> np.ndarray:
     """The readings a wiring would give under the check's conditions, in its reading order (outputs
     held at +/- ``rail``, the machine's saturation, when given)."""
@@ -128,7 +87,8 @@ def diagnose_readings(net: Netlist, machine: MachineProfile, check: StaticCheck,
     check : StaticCheck
         The check the readings were taken under.
     measured : numpy.ndarray
-        The measured voltages, in the check's reading order.
+        The measured voltages, in the check's reading order, each within
+        patchgen.patch.readings.reading_limit_V (so that every chi-square is finite).
     top : int
         How many faults to report.
 
@@ -137,6 +97,9 @@ def diagnose_readings(net: Netlist, machine: MachineProfile, check: StaticCheck,
     Verdict
         agree when every reading is within its tolerance; otherwise the likeliest faults.
     """
+    limit = reading_limit_V(machine)
+    if not np.all(np.abs(measured) <= limit):  # also false for nan: the chi-squares stay finite
+        raise ValueError(f"readings must be finite and within +/-{limit:g} V (patchgen.patch.readings checks them)")
     expected = np.array([r.expected_V for r in check.readings])
     tol = np.array([r.tolerance_V for r in check.readings])
     off = np.abs(measured - expected) > tol

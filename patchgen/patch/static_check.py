@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from patchgen.patch.netlist import Netlist
-from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.machine import MachineProfile, the_machine
 
 INTERNAL_TOLERANCE = 0.002  # assumed: the machine's matched input and feedback resistors, 0.2 %
 METER_RESOLUTION_V = 0.001  # the reading's last digit (the GP-6's DVM; THE ANALOG THING's meter: 10 mV)
@@ -190,7 +190,7 @@ def static_check(net: Netlist, machine: MachineProfile) -> StaticCheck:
         for a in net.amplifiers:
             readings.append(_reading(net, wires, machine, c, a.id, base))
         readings.append(_reading(net, wires, machine, c, "u_c", base))
-    unchecked = [f"{a}: its input network (the {machine.name} cannot patch it as a summer)"
+    unchecked = [f"{a}: its input network ({the_machine(machine.name)} cannot patch it as a summer)"
                  for a in dynamic if a not in switchable]
     if net.parts:
         unchecked.append(f"the external parts' values ({', '.join(p.id for p in net.parts)}): measure each before "

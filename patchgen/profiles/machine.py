@@ -190,3 +190,8 @@ def _check_amplifiers(profile: MachineProfile, source: str) -> None:
             if k not in keys:
                 raise InputError(source, f"amplifiers[{i}].inputs.{k}",
                                  f"not an input weight of this machine (input_weights give {', '.join(sorted(keys))})")
+
+
+def the_machine(name: str) -> str:
+    """A machine's name with "the" before it, unless the name starts with it (THE ANALOG THING)."""
+    return name if name.lower().startswith("the ") else f"the {name}"

@@ -8,6 +8,7 @@ import io
 from rich.table import Table
 
 from patchgen.patch.netlist import Netlist
+from patchgen.profiles.machine import the_machine
 
 COLUMNS = ("pot", "setting", "signal", "amplifier", "input", "weight", "coefficient", "realized", "error_pct", "note")
 
@@ -36,7 +37,7 @@ def pots_csv(net: Netlist) -> str:
 def pot_table(net: Netlist, pot_setting: str) -> Table:
     """The pot table for the terminal; ``pot_setting`` says how the machine's pots are set (its
     profile's procedure.pot_setting)."""
-    t = Table(title=f"Pot settings for {net.design} on the {net.machine_name} ({pot_setting})",
+    t = Table(title=f"Pot settings for {net.design} on {the_machine(net.machine_name)} ({pot_setting})",
               title_justify="left")
     for c, j in (("pot", "left"), ("setting", "right"), ("signal", "left"), ("into", "left"),
                  ("coefficient", "right"), ("realised", "right"), ("error", "right")):

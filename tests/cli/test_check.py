@@ -13,7 +13,8 @@ from click.testing import CliRunner
 from patchgen.cli import cli
 from patchgen.cli.design import design_from_path
 from patchgen.patch.build import build_patch
-from patchgen.patch.fault_finding import predict
+from patchgen.patch.fault_finding import diagnose_readings, predict
+from patchgen.patch.readings import reading_limit_V
 from patchgen.patch.static_check import static_check, wires_of
 from tests.conftest import design_path
 
@@ -110,3 +111,42 @@ def test_a_bad_readings_file_is_one_line_and_exit_2(patched, tmp_path, edit, fie
 def test_a_missing_readings_file_is_one_line(tmp_path):
     r = CliRunner().invoke(cli, ["check", "bench-recommended", "--readings", str(tmp_path / "none.csv")])
     assert r.exit_code == 2 and len(r.output.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("edit", [
+    pytest.param(lambda t: "\ufeff" + t, id="utf8-bom"),
+    pytest.param(lambda t: t.replace("\n", "\r\n"), id="crlf"),
+    pytest.param(lambda t: t.replace("\n", "\n\n", 3), id="blank-lines"),
+    pytest.param(lambda t: t + t.splitlines()[1] + "\n", id="row-twice-same-value"),
+    pytest.param(lambda t: "\n".join(ln + (",notes" if i == 0 else ",") for i, ln in enumerate(t.splitlines())),
+                 id="extra-column"),
+    pytest.param(lambda t: t.replace(",", " , ", 6), id="spaces-around-cells"),
+])
+def test_a_readings_file_as_a_spreadsheet_saves_it_is_read(patched, tmp_path, edit):
+    """What a spreadsheet writes (a byte-order mark, CRLF, blank lines, a notes column) is valid."""
+    path, net, m, check = patched
+    filled = _filled(path, [r.expected_V for r in check.readings], tmp_path).read_text()
+    target = tmp_path / "saved.csv"
+    target.write_bytes(edit(filled).encode("utf-8"))
+    r = CliRunner().invoke(cli, ["check", "bench-recommended", "--readings", str(target)])
+    assert r.exit_code == 0, r.output
+    assert f"all {len(check.readings)} readings agree" in r.output
+
+
+def test_readings_at_the_limit_give_finite_chi_squares(patched, tmp_path):
+    """The largest readings accepted (ten times the reference) keep every chi-square finite."""
+    path, net, m, check = patched
+    limit = reading_limit_V(m)
+    values = [limit * (-1) ** k for k in range(len(check.readings))]
+    r = _check(_filled(path, values, tmp_path), "--json")
+    assert r.exit_code == 1, r.output
+    faults = json.loads(r.stdout)["faults"]
+    assert faults and all(np.isfinite(f["chi_square"]) for f in faults)
+    over = _check(_filled(path, [v * 1.001 for v in values], tmp_path, "over.csv"))
+    assert over.exit_code == 2 and "row 2: measured_V" in over.output
+
+
+def test_diagnosis_refuses_readings_out_of_range(patched):
+    path, net, m, check = patched
+    with pytest.raises(ValueError, match="finite"):
+        diagnose_readings(net, m, check, np.full(len(check.readings), 1e200))

@@ -1,6 +1,7 @@
 """`patchgen simulate` and `patchgen spice` from the command line."""
 
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -129,3 +130,13 @@ def test_patch_json(tmp_path):
     d = json.loads(r.stdout)
     assert {p["signal"] for p in d["pots"] if p["weight"] == 10} == {"theta", "s_dot"}
     assert d["machine"] == "gp6" and d["units"] == 1
+
+
+def test_the_summary_names_the_scenarios_own_fall_angle(tmp_path):
+    sc = tmp_path / "tilt.toml"
+    sc.write_text("duration_s = 0.5\nfall_angle_deg = 12.5\n[initial]\ntheta_deg = 2.0\n")
+    r = subprocess.run([sys.executable, "-m", "patchgen", "simulate", "bench-recommended", "--scenario", str(sc),
+                        "-o", str(tmp_path / "o"), "--runs", "2"], capture_output=True, text=True, cwd=ROOT,
+                       env={**os.environ, "COLUMNS": "200"})
+    assert r.returncode == 0, r.stderr
+    assert "fallen past 12.5 deg" in r.stdout and "30 deg" not in r.stdout

@@ -19,13 +19,14 @@ from patchgen.cli import main
 from tests.conftest import ROOT
 
 from .badinput_cases import DIRECTORY, FIFO, LOOP, Case, spec_cases
+from .badinput_check import check_cases
 from .badinput_identify import identify_cases
 from .badinput_inputs import profile_cases, scenario_cases
 from .badinput_options import file_cases, option_cases
 from .badinput_recordings import recording_cases
 
 CASES = (spec_cases() + scenario_cases() + profile_cases() + file_cases() + option_cases() + recording_cases()
-         + identify_cases())
+         + identify_cases() + check_cases())
 
 
 def _lay_out(case: Case, tmp: Path) -> None:

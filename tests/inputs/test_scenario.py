@@ -60,3 +60,16 @@ def test_noise_levels_explicit(tmp_path):
     assert sc.noise == NoiseLevels(mode="explicit", theta=0.01)
     assert load_scenario(_write(tmp_path, "duration_s = 1\nnoise = 'off'\n")).noise.mode == "off"
     assert load_scenario(_write(tmp_path, "duration_s = 1\ndrift = 0.004\n")).drift == 0.004
+
+
+def test_the_shortest_run_is_a_few_of_the_engines_steps(tmp_path):
+    """COARSEST_STEP_S is the engine's coarsest own step; a run of MIN_RUN_STEPS of them loads."""
+    from patchgen.bench.engine import BENCH_DT_S, IDEAL_DT_S
+    from patchgen.inputs.scenario import COARSEST_STEP_S, MIN_RUN_STEPS
+
+    assert COARSEST_STEP_S == max(BENCH_DT_S, IDEAL_DT_S)
+    p = tmp_path / "short.toml"
+    p.write_text(f"duration_s = {MIN_RUN_STEPS * COARSEST_STEP_S}\n")
+    assert load_scenario(p).duration_s == pytest.approx(0.05)
+    p.write_text("duration_s = 2e-5\ndt_s = 4e-6\n")
+    assert load_scenario(p).duration_s == 2e-5

@@ -75,3 +75,15 @@ def test_terminal_table_names_the_machine_and_how_pots_are_set(net):
     console.print(t)
     text = console.export_text()
     assert "A7 x10a (x10)" in text and "-0.232 %" in text
+
+
+def test_a_machine_named_with_its_article_is_not_given_another(net):
+    """THE ANALOG THING's name includes its article: the title and the static check's caption say it once."""
+    from patchgen.patch.static_check import static_check
+
+    tat = load_machine("the-analog-thing")
+    named = net.model_copy(update={"machine_name": tat.name})
+    assert pot_table(named, "x").title.startswith("Pot settings for bench-recommended on THE ANALOG THING (")
+    tat_net = build_patch(design_on(load_spec("bench-recommended"), tat, load_bench("uw-1991")), tat)
+    unseen = " ".join(static_check(tat_net, tat).unchecked)
+    assert "THE ANALOG THING cannot" in unseen and "the THE" not in unseen

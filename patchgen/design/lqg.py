@@ -17,7 +17,8 @@ from patchgen.design.margins import Margins, loop_margins
 from patchgen.design.model import LinearModel, build_model, open_loop_poles, plant_zeros
 from patchgen.design.numerics import failing_as
 from patchgen.design.observer import ObserverError, reduced_observer, reduced_observer_controller
-from patchgen.design.precision import GainSpread, gain_spread
+from patchgen.design.precision import GainSpread
+from patchgen.design.riccati import design_spread, filter_gain, filter_inputs, lqr_gain
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.spec import DesignSpec, q_matrix, r_matrix
 from patchgen.plant.equations import PlantParams
@@ -107,40 +108,16 @@ def lqr(spec: DesignSpec, model: LinearModel) -> tuple[np.ndarray, np.ndarray, n
         S = sla.solve_continuous_are(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError) as exc:
         raise spec.error("weights", f"the Riccati equation has no stabilising solution ({exc})") from None
-    K = _lqr_gain(A, B, Q, R, S)
+    K = lqr_gain(A, B, Q, R, S)
     if not np.all(np.isfinite(K)) or np.max(np.linalg.eigvals(A - B @ K).real) >= 0:
         raise spec.error("weights", "the Riccati solution does not stabilise the model")
     return Q, R, K, S
 
 
-def _lqr_gain(A, B, Q, R, S=None) -> np.ndarray:
-    """K = R^-1 B' S, S the stabilising solution of the regulator's Riccati equation."""
-    S = sla.solve_continuous_are(A, B, Q, R) if S is None else S
-    return np.linalg.solve(R, B.T @ S)
-
-
-def _filter_gain(Ae, Ce, Qn, V, P=None) -> np.ndarray:
-    """L = P C' V^-1, P the stabilising solution of the filter's Riccati equation."""
-    P = sla.solve_continuous_are(Ae.T, Ce.T, Qn, V) if P is None else P
-    return P @ Ce.T @ np.linalg.inv(V)
-
-
-def _filter_inputs(spec: DesignSpec, model: LinearModel, rho: float) -> tuple[np.ndarray, ...]:
-    """The Kalman filter's Ae, Ce, process noise rho G W G' and sensor noise V."""
-    e = spec.estimator
-    Ae, Be, Ce = model.submodel(model.estimated)
-    G = Be if isinstance(e.Gamma, str) else np.array(e.Gamma, dtype=float).reshape(len(model.estimated), -1)
-    W = np.atleast_2d(np.array(e.W, dtype=float))
-    V = np.array(e.V, dtype=float)
-    V = np.diag(V) if V.ndim == 1 else V
-    Qn = rho * G @ W @ G.T
-    return Ae, Ce, (Qn + Qn.T) / 2, V
-
-
 def kalman_gain(spec: DesignSpec, model: LinearModel, rho: float, field: str = "estimator.rho") -> np.ndarray:
     """Steady-state Kalman gain for the estimated states from s, theta, s_dot, W scaled by rho; a
     filter that cannot be had at this rho is refused naming ``field``."""
-    Ae, Ce, Qn, V = _filter_inputs(spec, model, rho)
+    Ae, Ce, Qn, V = filter_inputs(spec, model, rho)
     n = Ae.shape[0]
     if not _stabilisable(Ae.T, Ce.T):
         raise spec.error("estimator", "the estimated model is not detectable from s, theta, s_dot")
@@ -153,7 +130,7 @@ def kalman_gain(spec: DesignSpec, model: LinearModel, rho: float, field: str = "
     except (np.linalg.LinAlgError, ValueError) as exc:
         raise spec.error(field, f"the estimator Riccati equation has no solution at rho = {rho:g} ({exc}): "
                          f"{little}") from None
-    L = _filter_gain(Ae, Ce, Qn, V, P)
+    L = filter_gain(Ae, Ce, Qn, V, P)
     if not np.all(np.isfinite(L)) or np.max(np.linalg.eigvals(Ae - L @ Ce).real) >= 0 or L.shape[0] != n:
         raise spec.error(field, f"the Kalman filter is not stable at rho = {rho:g}: {little}")
     return L
@@ -280,15 +257,8 @@ def design(spec: DesignSpec, bench: BenchProfile | None = None, *, plant: PlantP
         est, ctl, lqg_m = _estimator(spec, bench, model, K, lqr_m, default_rolloff_s)
     return Design(spec=spec, model=model, Q=Q, R=R, K=K, S=S, closed_loop_poles=_sort(cl),
                   open_loop_poles=open_loop_poles(model), zeros=zeros, lqr_margins=lqr_m, estimator=est,
-                  controller=ctl, lqg_margins=lqg_m, spread=_spread(spec, model, Q, R, est))
+                  controller=ctl, lqg_margins=lqg_m, spread=design_spread(spec, model, Q, R, est))
 
-
-def _spread(spec: DesignSpec, model: LinearModel, Q, R, est: Estimator | None) -> GainSpread:
-    """How far K (and a Kalman L) move when their Riccati inputs move at rounding level."""
-    K = gain_spread(_lqr_gain, (model.A, model.B, Q, R), symmetric=(2, 3))
-    if est is None or est.kind != "kalman":
-        return GainSpread(K=K)
-    return GainSpread(K=K, L=gain_spread(_filter_gain, _filter_inputs(spec, model, est.rho), symmetric=(2, 3)))
 
 
 def design_on(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile | None, *,

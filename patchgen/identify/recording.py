@@ -19,9 +19,7 @@ says what to record for each test.
 
 from __future__ import annotations
 
-import os
 import re
-import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -37,6 +35,7 @@ from patchgen.identify.cells import (
     unit_problem,
 )
 from patchgen.inputs.errors import InputError
+from patchgen.inputs.inputfile import decode_text, read_bytes
 
 MAX_RECORDING_BYTES = 64 << 20  # 64 MiB: ten minutes of four channels at 2 kHz is some 40 MB of text
 CLOCK_TOLERANCE = 0.01  # a sample interval may differ from the median by 1 %: a recorder's clock, not a gap
@@ -113,31 +112,10 @@ class Recording:
 
 
 def read_csv_text(path: str | Path) -> str:
-    """The text of a recording file: a regular file of at most MAX_RECORDING_BYTES, UTF-8."""
-    p = str(path)
-    try:
-        st = os.stat(p)
-    except FileNotFoundError:
-        raise InputError(p, "", "no such file") from None
-    except OSError as exc:
-        raise InputError(p, "", f"cannot be read ({exc.strerror or exc})") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise InputError(p, "", "is not a regular file, not a recording")
-    if st.st_size > MAX_RECORDING_BYTES:
-        raise InputError(p, "", f"is larger than {MAX_RECORDING_BYTES >> 20} MiB: record fewer samples")
-    try:
-        with open(p, "rb") as fh:
-            data = fh.read(MAX_RECORDING_BYTES + 1)
-    except OSError as exc:
-        raise InputError(p, "", f"cannot be read ({exc.strerror or exc})") from None
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data[:exc.start].count(b"\n") + 1
-        raise InputError(p, "", f"not UTF-8 text (byte 0x{data[exc.start]:02x} on line {line})") from None
-    if "\0" in text:
-        raise InputError(p, "", "binary data, not a CSV recording")
-    return text.removeprefix("\ufeff")
+    """The text of a recording file: read as a spec is (a regular file, opened without blocking,
+    at most MAX_RECORDING_BYTES, UTF-8 with or without a byte-order mark)."""
+    data = read_bytes(path, limit=MAX_RECORDING_BYTES, kind="a CSV recording", too_large="record fewer samples")
+    return decode_text(data, str(path), kind="a CSV recording")
 
 
 def split_column(name: str) -> tuple[str, str] | None:

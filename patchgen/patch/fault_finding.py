@@ -1,8 +1,8 @@
 """From a static check's readings to the likeliest wiring fault.
 
 The technician fills the ``measured_V`` column of static-check.csv (read by
-patchgen.patch.readings). Each reading either agrees
-with its expected value within its tolerance, or the patch differs from the netlist. The fault
+patchgen.patch.readings). Each reading either agrees with its expected value within its
+tolerance, or the patch differs from the netlist. The fault
 model, one fault at a time, each a variation of the wiring that patchgen.patch.static_check.solve
 evaluates under the same conditions:
 

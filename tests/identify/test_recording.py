@@ -73,7 +73,7 @@ def test_a_quiet_recording_needs_a_sensor():
 def test_unreadable_files_are_named(tmp_path):
     with pytest.raises(InputError, match="no such file"):
         read_recording(tmp_path / "none.csv")
-    with pytest.raises(InputError, match="not a regular file"):
+    with pytest.raises(InputError, match="is a directory, not a CSV recording"):
         read_recording(tmp_path)
     (tmp_path / "bin.csv").write_bytes(b"\xff\xfe\x00")
     with pytest.raises(InputError, match="not UTF-8"):

@@ -104,6 +104,8 @@ def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx
     (plant_coefficients) are per lane. f_cart and f_tip are the scenario's pushes (N); the last
     two rows of nz, the bench's random forces on the cart and at the tip (N), per lane."""
     fc, ft = nz.shape[0] - 2, nz.shape[0] - 1
+    # Two lane loops, not one: the actuator's branches and the plant's trigonometry in one
+    # body keep LLVM from vectorising either; split, both run on whole SIMD registers.
     for l in range(XA.shape[0]):
         K_U, tau, dz, flim = ap[A_K_U, l], ap[A_TAU, l], ap[A_DEAD_ZONE, l], ap[A_FORCE_LIMIT, l]
         inv_tau = 1.0 / tau
@@ -118,11 +120,14 @@ def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx
         else:
             force, dx = ku_tau * (v - xa), (v - xa) * inv_tau
         force = flim if force > flim else (-flim if force < -flim else force)
-        if tripped[l]:
-            force = 0.0
+        kx[st, l] = dx
+        forces[st, l] = 0.0 if tripped[l] else force
+    for l in range(XA.shape[0]):
         sd, thd = X[2, l], X[3, l]
         sn, cs = sincos(X[1, l])
-        sdd, thdd = plant_accel(pc, l, sn, cs, sd, thd, force + (f_cart + nz[fc, l]), f_tip + nz[ft, l])
-        kp[st, 0, l], kp[st, 1, l], kp[st, 2, l], kp[st, 3, l] = sd, thd, sdd, thdd
-        kx[st, l] = dx
-        forces[st, l] = force
+        sdd, thdd = plant_accel(pc, l, sn, cs, sd, thd, forces[st, l] + (f_cart + nz[fc, l]),
+                                f_tip + nz[ft, l])
+        kp[st, 0, l] = sd
+        kp[st, 1, l] = thd
+        kp[st, 2, l] = sdd
+        kp[st, 3, l] = thdd

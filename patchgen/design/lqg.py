@@ -109,7 +109,7 @@ def lqr(spec: DesignSpec, model: LinearModel) -> tuple[np.ndarray, np.ndarray, n
     except (np.linalg.LinAlgError, ValueError) as exc:
         raise spec.error("weights", f"the Riccati equation has no stabilising solution ({exc})") from None
     K = lqr_gain(A, B, Q, R, S)
-    if not np.all(np.isfinite(K)) or np.max(np.linalg.eigvals(A - B @ K).real) >= 0:
+    if not np.all(np.isfinite(K)) or np.max(np.linalg.eigvals(A - B @ K).real) >= -STABLE_TOL:
         raise spec.error("weights", "the Riccati solution does not stabilise the model")
     return Q, R, K, S
 
@@ -131,7 +131,8 @@ def kalman_gain(spec: DesignSpec, model: LinearModel, rho: float, field: str = "
         raise spec.error(field, f"the estimator Riccati equation has no solution at rho = {rho:g} ({exc}): "
                          f"{little}") from None
     L = filter_gain(Ae, Ce, Qn, V, P)
-    if not np.all(np.isfinite(L)) or np.max(np.linalg.eigvals(Ae - L @ Ce).real) >= 0 or L.shape[0] != n:
+    if (not np.all(np.isfinite(L)) or np.max(np.linalg.eigvals(Ae - L @ Ce).real) >= -STABLE_TOL
+            or L.shape[0] != n):
         raise spec.error(field, f"the Kalman filter is not stable at rho = {rho:g}: {little}")
     return L
 

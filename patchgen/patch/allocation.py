@@ -104,29 +104,43 @@ def _plan_terms(real: Realization, machine: MachineProfile):
     return blocks, kept, notes, too_big
 
 
-def _jacks_fit(blocks: list[Block], kept: dict[str, list[Term]], pre: dict[str, set[str]],
-               machine: MachineProfile | None) -> bool:
-    """Whether every stage's x1 and x10 inputs fit the roomiest amplifier of the machine."""
+def _jacks_test(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile | None):
+    """A test of a choice of pre-summers (block -> the signals it stages): whether every stage's
+    x1 and x10 inputs then fit the roomiest amplifier of the machine. Each term's input weight is
+    found once here, not once per choice the polarity search tries."""
     if machine is None:
-        return True
-    ws = machine.input_weights
-    cap = {w: max(a.input_count(w) for a in machine.amplifiers) for w in ws}
+        return lambda pre: True
+    ws = tuple(machine.input_weights)
+    cap = tuple(max(a.input_count(w) for a in machine.amplifiers) for w in ws)
+    lowest = ws.index(min(ws))
+    per_block = []  # (block, signal -> its terms' count per weight, the block's count per weight)
     for b in blocks:
-        main = {w: 0 for w in ws}
-        staged = {w: 0 for w in ws}
-        if b.name in pre:
-            main[min(ws)] += 1
+        by_signal: dict[str, list[int]] = {}
         for t in kept[b.name]:
-            w = weight_for(abs(t.coeff), machine)
-            (staged if t.signal in pre.get(b.name, ()) else main)[w] += 1
-        if any(main[w] > cap[w] or staged[w] > cap[w] for w in ws):
-            return False
-    return True
+            by_signal.setdefault(t.signal, [0] * len(ws))[ws.index(weight_for(abs(t.coeff), machine))] += 1
+        total = [sum(row[i] for row in by_signal.values()) for i in range(len(ws))]
+        per_block.append((b.name, by_signal, total))
+
+    def fits(pre: dict[str, set[str]]) -> bool:
+        for name, by_signal, total in per_block:
+            main, staged = list(total), [0] * len(ws)
+            if name in pre:
+                main[lowest] += 1
+                for sig in pre[name]:
+                    for i, n in enumerate(by_signal.get(sig, ())):
+                        main[i] -= n
+                        staged[i] += n
+            if any(m > c or st > c for m, st, c in zip(main, staged, cap)):
+                return False
+        return True
+
+    return fits
 
 
 def _search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile | None = None):
     """Choose block polarities and shared inverters minimising amplifiers (with inputs that fit)."""
     free = [b.name for b in blocks if b.name != "u_c"]
+    fits = _jacks_test(blocks, kept, machine)
     best = None
     for pols in itertools.product((-1, 1), repeat=len(free)):
         P = dict(zip(free, pols))
@@ -140,14 +154,18 @@ def _search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachinePr
                     mism.setdefault(b.name, set()).add(t.signal)
         cand = sorted(set().union(*mism.values())) if mism else []
         for k in range(len(cand) + 1):
+            if best is not None and k >= best[0][0]:
+                break  # k inverters alone cost as much as the best: so does every larger k
             for inv in itertools.combinations(cand, k):
-                pre = [b for b, m in mism.items() if not m <= set(inv)]
-                # a differentiator takes a single input: a pre-summer feeds it fine
-                cost = (len(inv) + len(pre), len(inv))
+                shared = set(inv)
+                # a block with a mismatched term no shared inverter serves gets a pre-summer
+                # (a differentiator takes a single input: a pre-summer feeds it fine)
+                pre = {b: m - shared for b, m in mism.items() if not m <= shared}
+                cost = (k + len(pre), k)
                 if best is not None and cost >= best[0]:
                     continue
-                if _jacks_fit(blocks, kept, {b: mism[b] - set(inv) for b in pre}, machine):
-                    best = (cost, P, set(inv), {b: mism[b] - set(inv) for b in pre})
+                if fits(pre):
+                    best = (cost, P, shared, pre)
     if best is None:  # nothing fits the jacks: keep the cheapest, the emitter names the shortfall
         return _search(blocks, kept, None)
     return best[1], best[2], best[3]
@@ -229,13 +247,14 @@ def _unit_inverters(blocks: list[Block], kept: dict[str, list[Term]], P: dict[st
     partial sum must not amplify its source toward the rails (a lag's input, say, scaled by
     T/tau). Kept as a pre-summer when the block's jacks would not take the extra weighted input."""
     out = set(inverted)
+    fits = _jacks_test(blocks, kept, machine)
     for b, staged in sorted(pre.items()):
         terms = [t for t in kept[b] if t.signal in staged]
         if len(terms) != 1 or abs(terms[0].coeff) <= 1 or terms[0].signal in out:
             continue
         trial = out | {terms[0].signal}
         rest = {n: {s for s in m if s not in trial} for n, m in pre.items()}
-        if _jacks_fit(blocks, kept, {n: m for n, m in rest.items() if m}, machine):
+        if fits({n: m for n, m in rest.items() if m}):
             out = trial
     return out
 

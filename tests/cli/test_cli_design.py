@@ -2,19 +2,17 @@
 
 import json
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from tests.conftest import DESIGNS, ROOT
+from tests.cli_run import run_patchgen
+from tests.conftest import DESIGNS
 
 SHIPPED = sorted(p.stem for p in DESIGNS.glob("*.toml"))
 
 
-def run(*args, cwd=ROOT):
-    return subprocess.run([sys.executable, "-m", "patchgen", *args], capture_output=True, text=True, cwd=cwd)
+run = run_patchgen
 
 
 def test_case1_json_contract():

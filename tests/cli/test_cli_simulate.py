@@ -1,7 +1,6 @@
 """`patchgen simulate` and `patchgen spice` from the command line."""
 
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -13,11 +12,10 @@ from patchgen.cli.design import design_from_path
 from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.profiles.bench import load_bench
+from tests.cli_run import run_patchgen
 from tests.conftest import ROOT, design_path
 
-
-def run(*args):
-    return subprocess.run([sys.executable, "-m", "patchgen", *args], capture_output=True, text=True, cwd=ROOT)
+run = run_patchgen
 
 
 def test_ch5_patch_fails_on_the_bench_and_says_why(tmp_path):
@@ -135,8 +133,7 @@ def test_patch_json(tmp_path):
 def test_the_summary_names_the_scenarios_own_fall_angle(tmp_path):
     sc = tmp_path / "tilt.toml"
     sc.write_text("duration_s = 0.5\nfall_angle_deg = 12.5\n[initial]\ntheta_deg = 2.0\n")
-    r = subprocess.run([sys.executable, "-m", "patchgen", "simulate", "bench-recommended", "--scenario", str(sc),
-                        "-o", str(tmp_path / "o"), "--runs", "2"], capture_output=True, text=True, cwd=ROOT,
-                       env={**os.environ, "COLUMNS": "200"})
+    r = run("simulate", "bench-recommended", "--scenario", str(sc), "-o", str(tmp_path / "o"), "--runs", "2",
+            env={"COLUMNS": "200"})
     assert r.returncode == 0, r.stderr
     assert "fallen past 12.5 deg" in r.stdout and "30 deg" not in r.stdout

@@ -4,19 +4,15 @@ command line, and the fitted profile as a drop-in bench for the other commands."
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import tomllib
 
 import pytest
 
 from patchgen.profiles.bench import load_bench
-from tests.conftest import ROOT
+from tests.cli_run import run_patchgen
 from tests.identify.benches import TRUE_BENCH, TRUE_PLANT, bench_toml, spec_toml
 
-
-def run(*args, cwd=ROOT):
-    return subprocess.run([sys.executable, "-m", "patchgen", *args], capture_output=True, text=True, cwd=cwd)
+run = run_patchgen
 
 
 @pytest.fixture(scope="module")

@@ -8,6 +8,7 @@ import sys
 
 import pytest
 
+from tests.cli_run import run_patchgen
 from tests.conftest import ROOT
 
 from .test_sheet import MM, _pdf_pages, allowed_pages
@@ -32,8 +33,7 @@ def print_pages(html, tmp_path):
 ])
 def test_written_sheet_fits_two_pages(tmp_path, args):
     out = tmp_path / "out"
-    r = subprocess.run([sys.executable, "-m", "patchgen", *args, "-o", str(out)], capture_output=True, text=True,
-                       cwd=ROOT)
+    r = run_patchgen(*args, "-o", str(out))
     assert r.returncode == 0, r.stderr
     pages, boxes = print_pages(out / "patch-sheet.html", tmp_path)
     assert 1 <= pages <= allowed_pages((out / "patch-sheet.html").read_text())
@@ -64,8 +64,7 @@ def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_p
     two.write_text(text)
     for spec, most in ((that, 2), (str(two), 3)):
         out = tmp_path / f"out-{most}"
-        r = subprocess.run([sys.executable, "-m", "patchgen", "patch", spec, "--runs", "4", "-o", str(out)],
-                           capture_output=True, text=True, cwd=ROOT)
+        r = run_patchgen("patch", spec, "--runs", "4", "-o", str(out))
         assert r.returncode == 0, r.stderr
         pages, _ = print_pages(out / "patch-sheet.html", tmp_path)
         assert 1 <= pages <= allowed_pages((out / "patch-sheet.html").read_text(), most), (spec, pages)

@@ -1,8 +1,6 @@
 """`patchgen sweep`: thesis-style tables of gains against 10% parameter changes."""
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -14,7 +12,8 @@ from patchgen.inputs.spec import load_spec, q_matrix, r_matrix
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.machine import load_machine
 from patchgen.studies.sweep import cases, sweep
-from tests.conftest import ROOT, design_path
+from tests.cli_run import run_patchgen
+from tests.conftest import design_path
 
 
 def test_cases_layout():
@@ -65,13 +64,11 @@ def test_bad_options():
 
 
 def test_cli_json_and_bad_vary():
-    r = subprocess.run([sys.executable, "-m", "patchgen", "sweep", "thesis-case1", "--vary",
-                        "M,m,l,b_VF,c", "--by", "10%", "--json"], capture_output=True, text=True, cwd=ROOT)
+    r = run_patchgen("sweep", "thesis-case1", "--vary", "M,m,l,b_VF,c", "--by", "10%", "--json")
     assert r.returncode == 0, r.stderr
     rows = json.loads(r.stdout)
     assert len(rows) == 12 and rows[0]["case"] == "nominal"
-    r = subprocess.run([sys.executable, "-m", "patchgen", "sweep", "thesis-case1", "--vary", "Mx"],
-                       capture_output=True, text=True, cwd=ROOT)
+    r = run_patchgen("sweep", "thesis-case1", "--vary", "Mx")
     assert r.returncode == 2 and "Mx" in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 

@@ -1,8 +1,6 @@
 """From hanging to balanced: pump-up, hand-off to the patched controller, hold on the bench."""
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 
@@ -11,7 +9,8 @@ from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.profiles.bench import load_bench
 from patchgen.swingup.manoeuvre import manoeuvre
-from tests.conftest import ROOT, design_path
+from tests.cli_run import run_patchgen
+from tests.conftest import design_path
 
 
 def test_bench_recommended_from_hanging_to_held():
@@ -32,8 +31,7 @@ def test_bench_recommended_from_hanging_to_held():
 
 
 def test_swingup_cli_writes_schedule_on_the_sheet(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "patchgen", "swingup", "bench-recommended", "-o",
-                        str(tmp_path), "--json", "--svg"], capture_output=True, text=True, cwd=ROOT)
+    r = run_patchgen("swingup", "bench-recommended", "-o", str(tmp_path), "--json", "--svg")
     assert r.returncode == 0, r.stderr
     s = json.loads(r.stdout)
     assert s["reached_zone"] and s["handoff_time_s"] < 7 and s["held"]

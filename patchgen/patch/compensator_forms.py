@@ -43,6 +43,7 @@ SCALING_THETA0_RAD = math.radians(10.0)  # offset-10deg, the shipped scenario wi
 SCALING_S0_M = 0.2  # step-cart's 0.2 m step, as an initial cart offset
 SCALING_HORIZON_S = 10.0  # long enough for every scenario's transient to settle (shipped sims: 10 s)
 SCALING_STEP_S = 0.005
+EXCURSION_CHUNK = 250  # steps between excursion_peaks' divergence tests (a speed choice only)
 STAGE_SUFFIX = "_in"  # a staged block's summer (staged_blocks)
 ROUNDING = 1e-9  # relative: a form's entry this small beside its matrix's largest is a transformation's noise
 
@@ -166,21 +167,21 @@ def excursion_peaks(Acl: np.ndarray, Cout: np.ndarray, where: list[int]) -> np.n
         x = np.zeros(Acl.shape[0])
         x[i] = value
         done = 0
-        while done < steps:  # in chunks: the divergence test once per chunk, not once per step
-            chunk = min(_CHUNK, steps - done)
-            for k in range(done, done + chunk):
-                x = Phi @ x
-                xs[k] = x
-            bad = ~np.isfinite(xs[done:done + chunk]).all(axis=1) | (np.abs(xs[done:done + chunk]).max(axis=1) > 1e12)
-            if bad.any():
-                done += int(np.argmax(bad)) + 1
-                break
-            done += chunk
+        # in chunks: the divergence test once per chunk, not once per step; the steps a chunk takes
+        # past its first diverged sample are dropped, and may overflow without a word
+        with np.errstate(over="ignore", invalid="ignore"):
+            while done < steps:
+                chunk = xs[done:min(done + EXCURSION_CHUNK, steps)]
+                for k in range(chunk.shape[0]):
+                    x = Phi @ x
+                    chunk[k] = x
+                bad = ~np.isfinite(chunk).all(axis=1) | (np.abs(chunk).max(axis=1) > 1e12)
+                if bad.any():
+                    done += int(np.argmax(bad)) + 1
+                    break
+                done += chunk.shape[0]
         peak = np.maximum(peak, np.abs(xs[:done] @ Cout.T).max(axis=0, initial=0.0))
     return peak
-
-
-_CHUNK = 250  # steps between divergence tests in excursion_peaks
 
 
 def _scale(peak: float, reference: float, into: list[float], outof: list[float], weights, rate: float) -> float:

@@ -119,7 +119,7 @@ def _worst_swing(res: SimResult, saturation_V: float) -> float:
 
 def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, scenario: Scenario,
           *, seed: int | None = None, corner_runs: int, drawn: SimResult | None = None, ends: bool = False,
-          ideal: bool = False, stop_below: int | None = None,
+          ideal: bool = False, stop: Callable[[CornerOutcome], bool] | None = None,
           progress: Callable[[int, int], None] | None = None) -> BenchStudy:
     """The patch at every corner of the bench's ranges (and each end of each range, if asked).
 
@@ -143,8 +143,8 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
         Also run each end of each range, the others at the profile's values (the weakest parameter).
     ideal : bool
         Every imperfection off (only the ranges an ideal run feels).
-    stop_below : int, optional
-        Stop at the first corner held in fewer runs than this (the study then has fewer corners
+    stop : callable, optional
+        ``stop(corner)`` after each corner: True ends the study there (it then has fewer corners
         than the box: a search's candidate already beaten).
     progress : callable, optional
         ``progress(done, total)`` after each corner or end.
@@ -172,7 +172,7 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
     done_corners = []
     for v in corners:
         done_corners.append(run(v))
-        if stop_below is not None and done_corners[-1].outcome.held < stop_below:
+        if stop is not None and stop(done_corners[-1]) and len(done_corners) < len(corners):
             break
     return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
                       tuple(done_corners), rest, tuple(run(v) for v in singles))

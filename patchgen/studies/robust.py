@@ -8,8 +8,9 @@ shrinks the limit cycle a dead zone drives; the force's excursion stays the spec
 without the integral of the cart position. Every point that designs and fits the machine is run
 at every corner of the ranges in every scenario, SEARCH_RUNS seeds per corner; the point held best
 at its worst corner wins (ties: the smaller cart excursion over the corners, i.e. the most room
-before the limit switches; then the grid order). A point is dropped as soon as one corner does
-worse than the best point's worst.
+before the limit switches; then the grid order). A point is dropped as soon as its corners so far
+rank no better than the best point's: further corners can only lower its worst and widen its
+excursion, so the choice is the one a full run of every point would make.
 
 Other ways to beat a dead zone, and why a patch here does not use them (``ALTERNATIVES``): dither
 needs a periodic source the machine profiles do not list, and a dead-zone inverse needs diodes or a
@@ -105,6 +106,18 @@ def excursion(st: BenchStudy) -> float:
     return max(cart_excursion(c) for c in st.corners)
 
 
+def _key(held: int, room: float) -> tuple[int, float]:
+    """A point's rank: runs held at its worst corner, then the least cart excursion (m)."""
+    return held, -round(room, 4)
+
+
+def beaten(key: tuple[int, float], best_key: tuple[int, float] | None) -> bool:
+    """Whether a point whose corners so far rank ``key`` can no longer beat the best: more corners
+    only lower its worst corner's runs held and raise its excursion, so its rank only falls, and
+    a tie keeps the earlier point."""
+    return best_key is not None and key <= best_key
+
+
 def search(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenarios: Sequence[Scenario],
            seed: int | None = None, progress: Callable[[int, int], None] | None = None) -> RobustChoice | None:
     """The grid point held best at its worst corner of the bench's ranges (see the module docstring).
@@ -143,18 +156,21 @@ def search(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scena
         tried += 1
         worst, room = None, 0.0
         for sc in order:
+            held_so_far = SEARCH_RUNS if worst is None else worst[1].outcome.held
             st = study(net, plant_params(d.spec), bench, machine, sc, seed=seed, corner_runs=SEARCH_RUNS,
-                       stop_below=None if best_key is None else best_key[0])
-            if len(st.corners) < len(corner_values(bench, st.ranges)[0]):
-                worst = None
-                break  # dropped: a corner held less than the best's worst
+                       stop=lambda c, h=held_so_far, r=room, b=best_key: beaten(_key(min(h, c.outcome.held),
+                                                                         max(r, cart_excursion(c))), b))
             w = st.worst_corner
             if worst is None or w.outcome.held < worst[1].outcome.held:
                 worst = (sc.name, w)
             room = max(room, excursion(st))
+            if (len(st.corners) < len(corner_values(bench, st.ranges)[0])
+                    or beaten(_key(worst[1].outcome.held, room), best_key)):
+                worst = None
+                break  # dropped: already no better than the best, whatever its other corners do
         if worst is None:
             continue
-        key = (worst[1].outcome.held, -round(room, 4))
+        key = _key(worst[1].outcome.held, room)
         if best_key is None or key > best_key:
             best_key = key
             best = RobustChoice(d.spec, factors, integral, worst[1].outcome.held, worst[1].outcome.runs,

@@ -23,8 +23,10 @@ from __future__ import annotations
 
 import math
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from patchgen.bench import bench_spread, kernel
@@ -185,8 +187,10 @@ def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]) -> Draws:
 def run_batch(cfg: EngineConfig, draws: Draws, n_history: int) -> BatchOutput:
     """One run per row of ``draws``, in blocks of LANES runs side by side.
 
-    The blocks run in parallel threads without the GIL; a batch of one block runs in this thread
-    (a thread launch costs more than the block on a busy machine).
+    The blocks run in parallel threads (run_block releases the GIL; as many threads as numba's
+    numba.get_num_threads(), the cores by default); a batch of one block runs in this thread (a thread
+    launch costs more than the block on a busy machine). Threads of Python, not a numba parallel
+    loop: that loop would be a second compilation of the whole kernel (about 9 s on a first run).
 
     Parameters
     ----------
@@ -211,12 +215,14 @@ def run_batch(cfg: EngineConfig, draws: Draws, n_history: int) -> BatchOutput:
                   history=np.zeros((n_history, n_samples, H_AMPS + n_amp)),
                   history_length=np.zeros(n_history, dtype=np.int64))
     args = (draws, *cfg.records, out)
-    if runs <= LANES:
-        _notice_if_compiling(kernel.run_block, (0, runs) + args)
-        kernel.run_block(0, runs, *args)
-    else:
-        _notice_if_compiling(kernel.run_blocks, args)
-        kernel.run_blocks(*args)
+    _notice_if_compiling(kernel.run_block, (0, min(runs, LANES)) + args)
+    blocks = [(lo, min(LANES, runs - lo)) for lo in range(0, runs, LANES)]
+    if len(blocks) == 1:
+        kernel.run_block(*blocks[0], *args)
+    else:  # the blocks write disjoint rows of out and release the GIL
+        with ThreadPoolExecutor(min(len(blocks), nb.get_num_threads())) as pool:
+            for _ in pool.map(lambda block: kernel.run_block(*block, *args), blocks):
+                pass
     return BatchOutput(
         **{name: results[:, RESULTS.index(name)] for name in SUMMARIES},
         final_state=results[:, R_FINAL:R_FINAL + N_STATES], overload_first=out.overload_first,

@@ -139,7 +139,7 @@ class Outputs(NamedTuple):
     history_length: np.ndarray  # samples recorded per history run
 
 
-@nb.njit(**_JIT)
+@nb.njit(nogil=True, **_JIT)
 def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out):
     """Runs lo .. lo + nl - 1 side by side, into the rows of ``out`` (an Outputs) that are theirs.
 
@@ -362,13 +362,3 @@ def _record(out, r, l, t, xp, s_ref, sig, out_index, forces, ns):
     for j in range(hist.shape[2] - H_AMPS):
         hist[r, k, H_AMPS + j] = sig[ns + j, l]
     out.history_length[r] = k + 1
-
-
-@nb.njit(parallel=True, nogil=True, **_JIT)
-def run_blocks(draws, settings, sensors, noise, wiring, disturbances, out):
-    """Every run of the batch, LANES at a time, the blocks spread over numba's threads
-    (arguments as run_block's)."""
-    runs = draws.keys.shape[0]
-    for b in nb.prange((runs + LANES - 1) // LANES):
-        lo = b * LANES
-        run_block(lo, min(LANES, runs - lo), draws, settings, sensors, noise, wiring, disturbances, out)

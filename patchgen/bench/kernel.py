@@ -188,7 +188,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     words = np.empty((WORDS, nl), dtype=np.uint64)
     noisy = np.any(nstd > 0.0)
     if noisy:  # start the noise in its stationary distribution
-        fill_normals(0, k0, k1, z, words)
+        fill_normals(np.int64(0), k0, k1, z, words)  # typed, not a literal: one compilation of it
         for c in range(nch):
             for l in range(nl):
                 nz[c, l] = z[c, l] * nstd[c, l] / math.sqrt(1.0 - noise.a[c] * noise.a[c])
@@ -206,7 +206,8 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     # filter state to its input, in evaluation order (one pass per amplifier reaches every chain)
     quiet = np.zeros((nch, nl))
     for _ in range(na):
-        circuit(xp, za, 0.0, quiet, sensors.state, gain, wiring, drift, sat, False, sig, raw, ka, 0, acc)
+        circuit(xp, za, 0.0, quiet, sensors.state, gain, wiring, drift, sat, np.bool_(False), sig, raw, ka,
+                np.int64(0), acc)  # typed, not literals: one compilation of the circuit
         for j in range(na):
             if wiring.kind[j] == DIFFERENTIATOR:
                 for l in range(nl):

@@ -15,5 +15,12 @@ def root() -> Path:
     return ROOT
 
 
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Modules marked heavy first (in collection order), then the rest as collected: the workers
+    take whole modules in this order, and a long module started last would keep one worker busy
+    while the other idles."""
+    items.sort(key=lambda item: item.get_closest_marker("heavy") is None)
+
+
 def design_path(name: str) -> Path:
     return DESIGNS / f"{name}.toml"

@@ -13,6 +13,8 @@ from tests.conftest import ROOT
 
 from .test_sheet import MM, _pdf_pages, allowed_pages
 
+pytestmark = pytest.mark.heavy  # see tests/conftest.py
+
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 

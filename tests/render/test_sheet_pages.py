@@ -2,7 +2,6 @@
 
 import json
 import re
-import shutil
 import subprocess
 import sys
 
@@ -13,29 +12,17 @@ from tests.conftest import ROOT
 
 from .test_sheet import MM, _pdf_pages, allowed_pages
 
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
-
-def print_pages(html, tmp_path):
-    pdf = tmp_path / "sheet.pdf"
-    subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                    f"--user-data-dir={tmp_path / 'profile'}", "--no-pdf-header-footer", f"--print-to-pdf={pdf}",
-                    html.as_uri()], check=True, capture_output=True, timeout=180)
-    return _pdf_pages(pdf.read_bytes())
-
-
-@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
 @pytest.mark.parametrize("args", [
     ["patch", "thesis-ch5", "--runs", "4"],
     ["patch", "bench-recommended", "--runs", "4"],
     ["swingup", "bench-recommended"],
 ])
-def test_written_sheet_fits_two_pages(tmp_path, args):
+def test_written_sheet_fits_two_pages(tmp_path, chromium, args):
     out = tmp_path / "out"
     r = run_patchgen(*args, "-o", str(out))
     assert r.returncode == 0, r.stderr
-    pages, boxes = print_pages(out / "patch-sheet.html", tmp_path)
+    pages, boxes = _pdf_pages(chromium.print_pdf(out / "patch-sheet.html"))
     assert 1 <= pages <= allowed_pages((out / "patch-sheet.html").read_text())
     assert all(w <= 210 * MM + 0.5 and h <= 279.4 * MM + 0.5 for w, h in boxes)
     assert "Predicted on the bench" in (out / "patch-sheet.html").read_text()
@@ -51,9 +38,8 @@ def _variant(tmp_path, name, **changes):
     return str(path)
 
 
-@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
 @pytest.mark.parametrize("name", ["thesis-ch5", "bench-recommended"])
-def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_path, name):
+def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_path, chromium, name):
     that = _variant(tmp_path, name, **{'machine__=__"gp6"': 'machine = "the-analog-thing"'})
     two = tmp_path / "two.toml"
     text = (ROOT / "designs" / f"{name}.toml").read_text()
@@ -66,7 +52,7 @@ def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_p
         out = tmp_path / f"out-{most}"
         r = run_patchgen("patch", spec, "--runs", "4", "-o", str(out))
         assert r.returncode == 0, r.stderr
-        pages, _ = print_pages(out / "patch-sheet.html", tmp_path)
+        pages, _ = _pdf_pages(chromium.print_pdf(out / "patch-sheet.html"))
         assert 1 <= pages <= allowed_pages((out / "patch-sheet.html").read_text(), most), (spec, pages)
         html = (out / "patch-sheet.html").read_text()
         assert "Static check" in html and (out / "static-check.csv").stat().st_size > 0

@@ -2,8 +2,6 @@
 
 import json
 import re
-import subprocess
-import sys
 
 import pytest
 
@@ -13,14 +11,28 @@ from tests.conftest import ROOT
 from .test_sheet import MM, _pdf_pages, allowed_pages
 
 
+@pytest.fixture(scope="module")
+def written(tmp_path_factory):
+    """``patchgen *args -o DIR`` run once a module for each ``args``: (the run, DIR). Tests that
+    print or read the same sheet share it; none of them writes to DIR."""
+    runs = {}
+
+    def write(*args):
+        if args not in runs:
+            out = tmp_path_factory.mktemp("out")
+            runs[args] = (run_patchgen(*args, "-o", str(out)), out)
+        return runs[args]
+
+    return write
+
+
 @pytest.mark.parametrize("args", [
     ["patch", "thesis-ch5", "--runs", "4"],
     ["patch", "bench-recommended", "--runs", "4"],
     ["swingup", "bench-recommended"],
 ])
-def test_written_sheet_fits_two_pages(tmp_path, chromium, args):
-    out = tmp_path / "out"
-    r = run_patchgen(*args, "-o", str(out))
+def test_written_sheet_fits_two_pages(written, chromium, args):
+    r, out = written(*args)
     assert r.returncode == 0, r.stderr
     pages, boxes = _pdf_pages(chromium.print_pdf(out / "patch-sheet.html"))
     assert 1 <= pages <= allowed_pages((out / "patch-sheet.html").read_text())
@@ -67,7 +79,7 @@ def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_p
     ["patch", "thesis-case1", "--runs", "4"],
     ["patch", "bench-lqg", "--runs", "4"],
 ])
-def test_every_diagram_on_the_sheet_prints_its_smallest_text_at_6pt_or_says_what_it_prints_at(tmp_path, args):
+def test_every_diagram_on_the_sheet_prints_its_smallest_text_at_6pt_or_says_what_it_prints_at(written, args):
     """The sheet shrinks a diagram to the page's 186 mm and to the height it leaves the diagram
     (96, 68 or 46 mm). Each inlined diagram, at the smaller of both scales, prints its smallest
     label at 6 pt or more; one too tall for that on one page fills a page and its caption names the
@@ -75,9 +87,7 @@ def test_every_diagram_on_the_sheet_prints_its_smallest_text_at_6pt_or_says_what
     at 3.3 pt, bench-lqg's first unit's at 1.2 pt, and nothing said so)."""
     from .svg_geometry import parse, printed_min_font
 
-    out = tmp_path / "out"
-    r = subprocess.run([sys.executable, "-m", "patchgen", *args, "-o", str(out)], capture_output=True, text=True,
-                       cwd=ROOT)
+    r, out = written(*args)
     assert r.returncode == 0, r.stderr
     html = (out / "patch-sheet.html").read_text()
     figures = re.findall(r"<figure>.*?</figure>", html, flags=re.S)

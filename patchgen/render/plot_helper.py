@@ -29,7 +29,7 @@ def start() -> None:
         return
     ctx = multiprocessing.get_context("fork")
     mine, theirs = ctx.Pipe()
-    proc = ctx.Process(target=_serve, args=(theirs,), daemon=True, name="patchgen-plots")
+    proc = ctx.Process(target=_serve, args=(theirs, mine), daemon=True, name="patchgen-plots")
     proc.start()
     theirs.close()
     _helper = (proc, mine)
@@ -46,7 +46,7 @@ class Job:
             try:
                 self._conn.send((fn, args))
             except Exception:  # arguments that do not pickle, or the helper gone: draw here
-                self._close()
+                self._close(stop=True)  # it has no job and holds nothing of ours: no wait for its warm-up
 
     def result(self):
         if self._conn is not None:
@@ -88,8 +88,12 @@ def submit(fn: Callable, *args) -> Job:
     return Job(fn, args)
 
 
-def _serve(conn) -> None:
-    """The helper: load matplotlib, draw a scrap figure, then run the one job sent."""
+def _serve(conn, command_end) -> None:
+    """The helper: load matplotlib, draw a scrap figure, then run the one job sent.
+
+    ``command_end`` is the command's end of the pipe, which the fork copied: it is closed here, so
+    the command closing its end ends this one's ``recv``."""
+    command_end.close()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the command's to handle
     try:
         _warm_up()

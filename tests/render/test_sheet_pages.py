@@ -2,9 +2,6 @@
 
 import json
 import re
-import shutil
-import subprocess
-import sys
 
 import pytest
 
@@ -15,29 +12,31 @@ from .test_sheet import MM, _pdf_pages, allowed_pages
 
 pytestmark = pytest.mark.heavy  # see tests/conftest.py
 
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory):
+    """``patchgen *args -o DIR`` run once a module for each ``args``: (the run, DIR). Tests that
+    print or read the same sheet share it; none of them writes to DIR."""
+    runs = {}
+
+    def write(*args):
+        if args not in runs:
+            out = tmp_path_factory.mktemp("out")
+            runs[args] = (run_patchgen(*args, "-o", str(out)), out)
+        return runs[args]
+
+    return write
 
 
-def print_pages(html, tmp_path):
-    pdf = tmp_path / "sheet.pdf"
-    subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                    f"--user-data-dir={tmp_path / 'profile'}", "--no-pdf-header-footer", f"--print-to-pdf={pdf}",
-                    html.as_uri()], check=True, capture_output=True, timeout=180)
-    return _pdf_pages(pdf.read_bytes())
-
-
-@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
 @pytest.mark.parametrize("args", [
     ["patch", "thesis-ch5", "--runs", "4"],
     ["patch", "bench-recommended", "--runs", "4"],
     ["swingup", "bench-recommended"],
 ])
-def test_written_sheet_fits_two_pages(tmp_path, args):
-    out = tmp_path / "out"
-    r = run_patchgen(*args, "-o", str(out))
+def test_written_sheet_fits_two_pages(written, chromium, args):
+    r, out = written(*args)
     assert r.returncode == 0, r.stderr
-    pages, boxes = print_pages(out / "patch-sheet.html", tmp_path)
+    pages, boxes = _pdf_pages(chromium.print_pdf(out / "patch-sheet.html"))
     assert 1 <= pages <= allowed_pages((out / "patch-sheet.html").read_text())
     assert all(w <= 210 * MM + 0.5 and h <= 279.4 * MM + 0.5 for w, h in boxes)
     assert "Predicted on the bench" in (out / "patch-sheet.html").read_text()
@@ -53,9 +52,8 @@ def _variant(tmp_path, name, **changes):
     return str(path)
 
 
-@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed")
 @pytest.mark.parametrize("name", ["thesis-ch5", "bench-recommended"])
-def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_path, name):
+def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_path, chromium, name):
     that = _variant(tmp_path, name, **{'machine__=__"gp6"': 'machine = "the-analog-thing"'})
     two = tmp_path / "two.toml"
     text = (ROOT / "designs" / f"{name}.toml").read_text()
@@ -68,7 +66,7 @@ def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_p
         out = tmp_path / f"out-{most}"
         r = run_patchgen("patch", spec, "--runs", "4", "-o", str(out))
         assert r.returncode == 0, r.stderr
-        pages, _ = print_pages(out / "patch-sheet.html", tmp_path)
+        pages, _ = _pdf_pages(chromium.print_pdf(out / "patch-sheet.html"))
         assert 1 <= pages <= allowed_pages((out / "patch-sheet.html").read_text(), most), (spec, pages)
         html = (out / "patch-sheet.html").read_text()
         assert "Static check" in html and (out / "static-check.csv").stat().st_size > 0
@@ -83,7 +81,7 @@ def test_the_analog_things_sheet_fits_two_pages_and_a_two_unit_sheet_three(tmp_p
     ["patch", "thesis-case1", "--runs", "4"],
     ["patch", "bench-lqg", "--runs", "4"],
 ])
-def test_every_diagram_on_the_sheet_prints_its_smallest_text_at_6pt_or_says_what_it_prints_at(tmp_path, args):
+def test_every_diagram_on_the_sheet_prints_its_smallest_text_at_6pt_or_says_what_it_prints_at(written, args):
     """The sheet shrinks a diagram to the page's 186 mm and to the height it leaves the diagram
     (96, 68 or 46 mm). Each inlined diagram, at the smaller of both scales, prints its smallest
     label at 6 pt or more; one too tall for that on one page fills a page and its caption names the
@@ -91,9 +89,7 @@ def test_every_diagram_on_the_sheet_prints_its_smallest_text_at_6pt_or_says_what
     at 3.3 pt, bench-lqg's first unit's at 1.2 pt, and nothing said so)."""
     from .svg_geometry import parse, printed_min_font
 
-    out = tmp_path / "out"
-    r = subprocess.run([sys.executable, "-m", "patchgen", *args, "-o", str(out)], capture_output=True, text=True,
-                       cwd=ROOT)
+    r, out = written(*args)
     assert r.returncode == 0, r.stderr
     html = (out / "patch-sheet.html").read_text()
     figures = re.findall(r"<figure>.*?</figure>", html, flags=re.S)

@@ -47,8 +47,10 @@ FILES = ("masses.toml", "calibration.csv", "actuator-step.csv", "actuator-ramp.c
 def _csv(test: str, header: tuple[str, ...], cols: list[np.ndarray], about: str) -> bytes:
     lines = [f"# test = {test}", f"# {about}", ", ".join(header)]
     row = ", ".join("%.10g" if h == "t_s" else "%.7g" for h in header)
-    data = np.column_stack([np.asarray(c, dtype=float) for c in cols]).tolist()
-    lines.extend(row % tuple(r) for r in data)  # one format per row: the same text as cell by cell
+    data = np.column_stack([np.asarray(c, dtype=float) for c in cols])
+    # one format for the whole table: the same text as row by row, cell by cell
+    if data.shape[0]:
+        lines.append("\n".join([row] * data.shape[0]) % tuple(data.ravel().tolist()))
     return ("\n".join(lines) + "\n").encode()
 
 

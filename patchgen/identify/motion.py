@@ -60,23 +60,31 @@ def slide(plant: PlantParams, s0: float, v0: float, push: np.ndarray, h: float,
     """The cart with the pendulum fixed to it (B.1 with the slope's force in ``push``):
     (M + m) s'' = push - b_VF s' - F_c sgn(s'), RK4 at step h with push held over each step.
     Returns s and s' at every step (len(push) + 1 samples)."""
-    mass = plant.M + plant.m
     s, v = np.empty(push.size + 1), np.empty(push.size + 1)
-    s[0], v[0] = s0, v0
-    def acc(f: float, vv: float) -> float:
-        return (f - plant.b_VF * vv - coulomb_N * np.sign(vv)) / mass
+    _slide(float(plant.M + plant.m), float(plant.b_VF), float(coulomb_N), float(s0), float(v0),
+           np.ascontiguousarray(push, dtype=float), float(h), s, v)
+    return s, v
 
+
+@nb.njit(**_JIT)
+def _slide_acc(f, vv, mass, b_VF, coulomb_N):
+    return (f - b_VF * vv - coulomb_N * np.sign(vv)) / mass
+
+
+@nb.njit(**_JIT)
+def _slide(mass, b_VF, coulomb_N, s0, v0, push, h, s, v):
+    """slide's RK4 steps into s and v."""
+    s[0], v[0] = s0, v0
     for k in range(push.size):
         f = push[k]
-        k1v = acc(f, v[k])
-        k2v = acc(f, v[k] + 0.5 * h * k1v)
-        k3v = acc(f, v[k] + 0.5 * h * k2v)
-        k4v = acc(f, v[k] + h * k3v)
+        k1v = _slide_acc(f, v[k], mass, b_VF, coulomb_N)
+        k2v = _slide_acc(f, v[k] + 0.5 * h * k1v, mass, b_VF, coulomb_N)
+        k3v = _slide_acc(f, v[k] + 0.5 * h * k2v, mass, b_VF, coulomb_N)
+        k4v = _slide_acc(f, v[k] + h * k3v, mass, b_VF, coulomb_N)
         v[k + 1] = v[k] + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
         s[k + 1] = s[k] + h / 6 * (v[k] + 2 * (v[k] + 0.5 * h * k1v) + 2 * (v[k] + 0.5 * h * k2v) + v[k] + h * k3v)
         if coulomb_N > 0 and v[k] != 0 and np.sign(v[k + 1]) != np.sign(v[k]) and abs(f) <= coulomb_N:
             v[k + 1] = 0.0  # static friction holds a cart that has stopped
-    return s, v
 
 
 @nb.njit(**_JIT)

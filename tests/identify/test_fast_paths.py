@@ -1,0 +1,92 @@
+"""The compiled paths of reading and fitting against the plain code they stand for: the recording's
+automaton against the regular expression of a plain number, the likelihood at many points
+against one point at a time, the batched curvature against its central differences one by one."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from patchgen.identify import filters, kalman
+from patchgen.identify.cells import PLAIN, plain_lines
+
+ALPHABET = list("0123456789") * 3 + list(".+-eE ,\t\n") + ["x", "_", "#"]
+
+
+def _regex_lines(text: str, ncols: int) -> bool:
+    cell = rf"[ \t]*{PLAIN.pattern}[ \t]*"
+    line = cell + ("," + cell) * (ncols - 1)
+    return re.fullmatch(rf"(?:{line}\n)*{line}", text) is not None
+
+
+@pytest.mark.parametrize("text, ncols, expected", [
+    ("0.5, -1e-3,+2.", 3, True), (".5,1.e5\n 3 ,\t4E+07", 2, True), ("1,2\n", 2, False), ("1,2\n\n3,4", 2, False),
+    ("1 2", 1, False), (".", 1, False), ("1e", 1, False), ("-.e1", 1, False), ("1,2,3", 2, False), ("1", 2, False),
+    ("nan", 1, False), ("1_000", 1, False), ("", 1, False)])
+def test_plain_lines_reads_what_the_regular_expression_matches(text, ncols, expected):
+    assert _regex_lines(text, ncols) is expected
+    assert plain_lines(np.frombuffer(text.encode("ascii"), np.uint8), ncols) is expected
+
+
+def test_plain_lines_agrees_with_the_regular_expression_on_random_text():
+    rng = np.random.default_rng(5)
+    agree = matched = 0
+    for _ in range(20000):
+        ncols = int(rng.integers(1, 4))
+        text = "".join(rng.choice(ALPHABET, size=int(rng.integers(0, 14))))
+        want = _regex_lines(text, ncols)
+        matched += want
+        agree += want == plain_lines(np.frombuffer(text.encode("ascii"), np.uint8), ncols)
+    assert agree == 20000 and matched > 500
+
+
+def _swing_case():
+    rng = np.random.default_rng(2)
+    t = np.arange(1500) * 0.02
+    y = 0.5 * np.exp(-0.03 * t) * np.cos(5.0 * t) + 0.01 + 1e-3 * rng.standard_normal(t.size)
+    P = np.array([[0.06, 25.0, 0.01, 0.5 / 2.3, 0.0, math.log(1e-3), math.log(1e-6)],
+                  [0.05, 25.1, 0.012, 0.48 / 2.3, 0.01, math.log(3e-3), math.log(2e-6)]])
+    return y, P
+
+
+def test_swing_nll_many_is_swing_nll_row_by_row():
+    y, P = _swing_case()
+    pred, terms, out = np.empty(y.size), np.empty(y.size), np.empty(len(P))
+    filters.swing_nll_many(y, 0.02, 40.0, 2.3, P, pred, terms, out)
+    for row, value in zip(P, out):
+        beta, w2, off, phi0, om0, lq, lr = row
+        assert value == filters.swing_nll(y, 0.02, beta, w2, 0.0, 40.0, math.exp(lq), math.exp(lr), 2.3, off, phi0,
+                                          om0, pred, terms)
+    with_gam = np.column_stack([P, [0.0, 0.02]])
+    filters.swing_nll_many(y, 0.02, 40.0, 2.3, with_gam, pred, terms, out)
+    assert out[1] == filters.swing_nll(y, 0.02, *with_gam[1, :2], 0.02, 40.0, math.exp(with_gam[1, 5]),
+                                       math.exp(with_gam[1, 6]), 2.3, *with_gam[1, 2:5], pred, terms)
+
+
+def test_coast_nll_many_is_coast_nll_row_by_row():
+    rng = np.random.default_rng(4)
+    t = np.arange(400) * 0.02
+    w = 2.0 * np.exp(-0.8 * t) + 0.01 * rng.standard_normal(t.size)
+    z = 0.3 + 1.5 * (1 - np.exp(-0.8 * t)) + 0.002 * rng.standard_normal(t.size)
+    P = np.array([[0.8, 0.6, 0.3, 2.0, 0.0, math.log(0.1), math.log(4e-6), math.log(1e-4), 0.05]])
+    pred, terms, out = np.empty(t.size), np.empty(t.size), np.empty(1)
+    filters.coast_nll_many(z, w, 0.02, 40.0, -1.0, 3, P, pred, terms, out)
+    a, rho, z0, w0, off, lq, lr1, lr2, f = P[0]
+    assert out[0] == filters.coast_nll(z, w, 0.02, a, -f, rho, math.exp(lq), 40.0, math.exp(lr1), math.exp(lr2), off,
+                                       z0, w0, -1.0, 3, pred, terms)
+
+
+def test_batched_hessian_is_the_central_differences():
+    A = np.array([[2.0, 0.3, -0.1], [0.3, 1.0, 0.2], [-0.1, 0.2, 3.0]])
+    f = lambda p: 0.5 * p @ A @ p + math.sin(p[0])
+    p, h = np.array([0.1, -0.2, 0.3]), np.array([1e-3, 2e-3, 1e-3])
+    H = kalman.hessian(lambda P: np.array([f(q) for q in P]), p, h)
+    exact = A.copy()
+    exact[0, 0] -= math.sin(p[0])
+    assert np.allclose(H, exact, atol=1e-5)
+    e = np.eye(3) * h
+    by_one = (f(p + e[2] + e[1]) - f(p + e[2] - e[1]) - f(p - e[2] + e[1]) + f(p - e[2] - e[1])) / (4 * h[2] * h[1])
+    assert H[1, 2] == by_one

@@ -10,7 +10,7 @@ import re
 import numpy as np
 import pytest
 
-from patchgen.identify import filters, kalman
+from patchgen.identify import filters, kalman, lag_grid
 from patchgen.identify.cells import PLAIN, plain_lines
 
 ALPHABET = list("0123456789") * 3 + list(".+-eE ,\t\n") + ["x", "_", "#"]
@@ -90,3 +90,24 @@ def test_batched_hessian_is_the_central_differences():
     e = np.eye(3) * h
     by_one = (f(p + e[2] + e[1]) - f(p + e[2] - e[1]) - f(p - e[2] + e[1]) + f(p - e[2] - e[1])) / (4 * h[2] * h[1])
     assert H[1, 2] == by_one
+
+
+@pytest.mark.parametrize("with_zero", [True, False])
+def test_grid_start_is_the_cell_by_cell_search(with_zero):
+    rng = np.random.default_rng(8)
+    dt = 0.005
+    u = np.repeat([0.0, 1.2, 0.0, -1.2, 0.0, 0.6, 0.0, -0.6], 300)
+    v = lag_grid.dead_zone(u, 0.3)
+    f = 9.0 * lag_grid.lag_state(v, dt, 0.25) + 0.1 + 0.02 * rng.standard_normal(u.size)
+    taus = np.geomspace(2 * lag_grid.MIN_TAU_S, 5.0, lag_grid.GRID_TAUS)
+    dzs = np.linspace(0, 0.9 * 1.2, lag_grid.GRID_DEAD_ZONES)
+    best = (np.inf, None)
+    for tau in taus:
+        V = np.array([lag_grid.dead_zone(u, dz) for dz in dzs])
+        approx = lag_grid.approximate_rss(V, f, dt, tau, with_zero)
+        for dz, a in zip(dzs, approx):
+            rss, c = lag_grid.cell(lag_grid.dead_zone(u, dz), f, dt, tau, with_zero)
+            assert a == pytest.approx(rss, rel=1e-9)
+            if rss < best[0]:
+                best = (rss, [c[0], c[1] if with_zero else 0.0, tau, dz, c[-1]])
+    assert np.array_equal(lag_grid.grid_start(u, f, dt, with_zero), np.array(best[1]))

@@ -1,0 +1,114 @@
+"""The actuator fit's start: a grid over the lag tau and the dead zone, the gain (and the zero's
+gain) and the gauge's zero by linear least squares in each cell, the cell of least residual
+taken.
+
+The grid is searched cell by cell with numpy's least squares (``cell``). Most cells are far from
+the least, and a compiled pass (``approximate_rss``: the normal equations' coefficients, the sum of
+squares from their residuals) says so for all of them at once; only the cells it cannot tell from
+the least are searched cell by cell, in grid order, so that the start is the one the full search
+gives.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+from scipy.signal import lfilter
+
+from patchgen.identify.lsq import FitError
+
+MIN_TAU_S = 1e-4  # s: the fit's floor for the lag (a shorter one is a gain at any sample rate used)
+GRID_TAUS, GRID_DEAD_ZONES = 18, 14  # lags from 0.2 ms to 5 s, dead zones to 90 % of the command
+TIE = 1e-6  # relative: cells this close to the least sum of squares are searched cell by cell
+CONDITION = 1e8  # so is a cell whose normal equations (columns scaled to one) are worse conditioned
+
+
+def dead_zone(u: np.ndarray, half_width: float) -> np.ndarray:
+    """The command after the dead zone: u - w above w, u + w below -w, 0 between."""
+    return np.where(u > half_width, u - half_width, np.where(u < -half_width, u + half_width, 0.0))
+
+
+def lag_state(v: np.ndarray, dt: float, tau: float) -> np.ndarray:
+    """The lag 1 / (tau s + 1) of v held over each interval, sampled before each update, from rest at v[0]."""
+    a = np.exp(-dt / tau)
+    return lfilter([0.0, 1.0 - a], [1.0, -a], v, zi=[v[0]])[0]
+
+
+def previous(v: np.ndarray) -> np.ndarray:
+    """v delayed one sample (the command held over the interval that ends at each sample)."""
+    return np.concatenate([v[:1], v[:-1]])
+
+
+def cell(v: np.ndarray, f: np.ndarray, dt: float, tau: float, with_zero: bool) -> tuple[float, np.ndarray]:
+    """The residual sum of squares and the coefficients (K_U[, K_Z], F0) of one cell, v the command
+    after its dead zone."""
+    y = lag_state(v, dt, tau)
+    cols = [y, (previous(v) - y) / tau, np.ones_like(y)] if with_zero else [y, np.ones_like(y)]
+    A = np.column_stack(cols)
+    c, *_ = np.linalg.lstsq(A, f, rcond=None)
+    return float(np.sum((A @ c - f) ** 2)), c
+
+
+@nb.njit(cache=True)
+def _columns(V, f, a, tau, with_zero, coef, G, b, rss):
+    """For each row v of V: the cell's columns (the lag's state y, (previous v - y) / tau with
+    the zero, 1) run sample by sample; without coef their products G and with f b, with coef
+    the residual sum of squares."""
+    k = 3 if with_zero else 2
+    x = np.empty(3)
+    for r in range(V.shape[0]):
+        y, prev = V[r, 0], V[r, 0]
+        total = 0.0
+        for s in range(f.size):
+            x[0] = y
+            x[1] = (prev - y) / tau
+            x[k - 1] = 1.0
+            if coef is None:
+                for i in range(k):
+                    b[r, i] += x[i] * f[s]
+                    for j in range(k):
+                        G[r, i, j] += x[i] * x[j]
+            else:
+                e = f[s]
+                for i in range(k):
+                    e -= coef[r, i] * x[i]
+                total += e * e
+            prev = V[r, s]
+            y = a * y + (1.0 - a) * prev
+        rss[r] = total
+
+
+def approximate_rss(V: np.ndarray, f: np.ndarray, dt: float, tau: float, with_zero: bool) -> np.ndarray:
+    """About ``cell``'s sum of squares for each row of V at once: never below the least-squares
+    minimum, above it by the square of the coefficients' rounding; inf where the normal equations
+    are too ill-conditioned to say."""
+    k = 3 if with_zero else 2
+    G, b, rss = np.zeros((V.shape[0], k, k)), np.zeros((V.shape[0], k)), np.zeros(V.shape[0])
+    a = math.exp(-dt / tau)
+    _columns(V, f, a, tau, with_zero, None, G, b, rss)
+    d = np.sqrt(np.maximum(np.einsum("rii->ri", G), 1e-300))
+    scaled = G / (d[:, :, None] * d[:, None, :])
+    coef = (np.linalg.pinv(scaled) @ (b / d)[:, :, None])[:, :, 0] / d
+    _columns(V, f, a, tau, with_zero, coef, G, b, rss)
+    return np.where(np.linalg.cond(scaled) < CONDITION, rss, np.inf)
+
+
+def grid_start(u: np.ndarray, f: np.ndarray, dt: float, with_zero: bool) -> np.ndarray:
+    """(K_U, K_Z, tau, dz, F0) of the grid's best cell: the first in grid order (lags, then dead
+    zones) of least residual."""
+    umax = float(np.max(np.abs(u)))
+    taus, dzs = np.geomspace(2 * MIN_TAU_S, 5.0, GRID_TAUS), np.linspace(0, 0.9 * umax, GRID_DEAD_ZONES)
+    V = np.array([dead_zone(u, dz) for dz in dzs])
+    approx = np.array([approximate_rss(V, f, dt, tau, with_zero) for tau in taus])
+    finite = np.isfinite(approx)
+    low = np.min(approx[finite]) if np.any(finite) else np.inf
+    best = (np.inf, None)
+    for i, j in zip(*np.nonzero(~finite | (approx <= low * (1 + TIE)))):
+        rss, c = cell(V[j], f, dt, taus[i], with_zero)
+        if rss < best[0]:
+            best = (rss, (c[0], c[1] if with_zero else 0.0, taus[i], dzs[j], c[-1]))
+    if best[1] is None:
+        raise FitError("no start for the fit: the force is not finite against any lag and dead zone")
+    return np.array(best[1])

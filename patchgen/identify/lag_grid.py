@@ -53,31 +53,38 @@ def cell(v: np.ndarray, f: np.ndarray, dt: float, tau: float, with_zero: bool) -
 
 @nb.njit(cache=True)
 def _columns(V, f, a, tau, with_zero, coef, G, b, rss):
-    """For each row v of V: the cell's columns (the lag's state y, (previous v - y) / tau with
-    the zero, 1) run sample by sample; without coef their products G and with f b, with coef
-    the residual sum of squares."""
+    """For each row v of V: the cell's columns x = (the lag's state y, (previous v - y) / tau with
+    the zero, 1) run sample by sample; without coef their products into G and with f into b, with
+    coef the residual sum of squares into rss."""
     k = 3 if with_zero else 2
-    x = np.empty(3)
     for r in range(V.shape[0]):
         y, prev = V[r, 0], V[r, 0]
-        total = 0.0
+        syy = syz = sy = szz = sz = syf = szf = sf = total = 0.0
+        c0, c1, c2 = (0.0, 0.0, 0.0) if coef is None else (coef[r, 0], coef[r, 1], coef[r, k - 1])
         for s in range(f.size):
-            x[0] = y
-            x[1] = (prev - y) / tau
-            x[k - 1] = 1.0
+            z = (prev - y) / tau if with_zero else 0.0
             if coef is None:
-                for i in range(k):
-                    b[r, i] += x[i] * f[s]
-                    for j in range(k):
-                        G[r, i, j] += x[i] * x[j]
+                syy += y * y
+                syz += y * z
+                sy += y
+                szz += z * z
+                sz += z
+                syf += y * f[s]
+                szf += z * f[s]
+                sf += f[s]
             else:
-                e = f[s]
-                for i in range(k):
-                    e -= coef[r, i] * x[i]
+                e = f[s] - c0 * y - c2 - (c1 * z if with_zero else 0.0)
                 total += e * e
             prev = V[r, s]
             y = a * y + (1.0 - a) * prev
         rss[r] = total
+        if coef is None and with_zero:
+            G[r, 0, 0], G[r, 0, 1], G[r, 0, 2], b[r, 0] = syy, syz, sy, syf
+            G[r, 1, 0], G[r, 1, 1], G[r, 1, 2], b[r, 1] = syz, szz, sz, szf
+            G[r, 2, 0], G[r, 2, 1], G[r, 2, 2], b[r, 2] = sy, sz, f.size, sf
+        elif coef is None:
+            G[r, 0, 0], G[r, 0, 1], b[r, 0] = syy, sy, syf
+            G[r, 1, 0], G[r, 1, 1], b[r, 1] = sy, f.size, sf
 
 
 def approximate_rss(V: np.ndarray, f: np.ndarray, dt: float, tau: float, with_zero: bool) -> np.ndarray:

@@ -29,6 +29,8 @@ STEP_RANGE = (1e-6, 1e4)  # a difference step's variance, in the start's scales 
 # cannot shrink a step into rounding error
 UNUSABLE = 1e300  # what the minimiser sees where the likelihood cannot be evaluated (a filter that diverged)
 DOF_STEP = 0.5  # the largest step in a noise parameter (a log variance) when differentiating the covariance
+FD_STEP = 1e-8  # the minimiser's forward-difference step, in the start's scales (L-BFGS-B's own default: its
+# steps forward stay inside lower bounds, so none is turned back)
 
 
 FitError = lsq.FitError
@@ -94,18 +96,6 @@ def hessian(f_many: Callable[[np.ndarray], np.ndarray], p: np.ndarray, h: np.nda
     return H
 
 
-class _Points:
-    """A map-like for scipy's finite differences (``workers``): the points of a gradient go to
-    ``f_many`` in one call. The function scipy hands over is the minimiser's own objective,
-    whose values at many points ``f_many`` gives."""
-
-    def __init__(self, f_many: Callable[[np.ndarray], np.ndarray]):
-        self.f_many = f_many
-
-    def __call__(self, _fun: Callable, points) -> list[float]:
-        return list(self.f_many(np.array(list(points))))
-
-
 def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray,
            lower: np.ndarray | None = None, covariance: bool = True,
            per_sample: Callable[[np.ndarray], np.ndarray] | None = None, noise: tuple[int, ...] = (),
@@ -149,16 +139,26 @@ def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray
     lo = np.full(p0.size, -np.inf) if lower is None else np.asarray(lower, float)
     z_lo = (lo - p0) / scale
     bounds = [(None if not math.isfinite(b) else b, None) for b in z_lo]
+    last: dict[str, np.ndarray | float] = {}
+
     def fz(z: np.ndarray) -> float:
         v = nll(p0 + scale * z)
-        return v if math.isfinite(v) else UNUSABLE
+        last["z"], last["f"] = z.copy(), v if math.isfinite(v) else UNUSABLE
+        return last["f"]
 
     def fz_many(Z: np.ndarray) -> np.ndarray:
         v = nll_many(p0 + scale * Z) if nll_many is not None else np.array([nll(p) for p in p0 + scale * Z])
         return np.where(np.isfinite(v), v, UNUSABLE)
 
-    res = minimize(fz, np.zeros(p0.size), method="L-BFGS-B", bounds=bounds,
-                   options={"maxiter": 500, "ftol": 1e-10, "gtol": 1e-3, "maxcor": 20, "workers": _Points(fz_many)})
+    def gradient(z: np.ndarray) -> np.ndarray:
+        """Forward differences of step FD_STEP from the value the minimiser has just had at z."""
+        f0 = last["f"] if "z" in last and np.array_equal(last["z"], z) else fz(z)
+        points = np.tile(z, (z.size, 1))
+        points[np.diag_indices(z.size)] = z + FD_STEP
+        return (fz_many(points) - f0) / ((z + FD_STEP) - z)
+
+    res = minimize(fz, np.zeros(p0.size), method="L-BFGS-B", jac=gradient, bounds=bounds,
+                   options={"maxiter": 500, "ftol": 1e-10, "gtol": 1e-3, "maxcor": 20})
     z = res.x
     if not covariance:
         return MlFit(p0 + scale * z, np.zeros((p0.size, p0.size)), float(res.fun))

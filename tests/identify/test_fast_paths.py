@@ -1,6 +1,8 @@
-"""The compiled paths of reading and fitting against the plain code they stand for: the recording's
-automaton against the regular expression of a plain number, the likelihood at many points
-against one point at a time, the batched curvature against its central differences one by one."""
+"""The compiled paths of writing, reading and fitting against the plain code they stand for: tables
+formatted against Python's %-format, the recording's automaton against the regular expression of
+a plain number, the likelihood at many points against one point at a time, the batched curvature
+against its central differences one by one, the actuator's start grid against its search cell by
+cell."""
 
 from __future__ import annotations
 
@@ -10,7 +12,7 @@ import re
 import numpy as np
 import pytest
 
-from patchgen.identify import filters, kalman, lag_grid
+from patchgen.identify import csvtext, filters, kalman, lag_grid
 from patchgen.identify.cells import PLAIN, plain_lines
 
 ALPHABET = list("0123456789") * 3 + list(".+-eE ,\t\n") + ["x", "_", "#"]
@@ -111,3 +113,28 @@ def test_grid_start_is_the_cell_by_cell_search(with_zero):
             if rss < best[0]:
                 best = (rss, [c[0], c[1] if with_zero else 0.0, tau, dz, c[-1]])
     assert np.array_equal(lag_grid.grid_start(u, f, dt, with_zero), np.array(best[1]))
+
+
+def _python_table(values: np.ndarray, precisions: tuple[int, ...]) -> str:
+    row = ", ".join(f"%.{p}g" for p in precisions)
+    return "\n".join(row % tuple(r) for r in values.tolist())
+
+
+@pytest.mark.parametrize("precisions", [(7,), (10,), (10, 7), (1,), (3,)])
+def test_format_table_writes_what_python_writes(precisions):
+    rng = np.random.default_rng(11)
+    n = 40000 - 40000 % len(precisions)
+    special = [0.0, -0.0, 0.5, 2.5, 1e-4, 9.9999995e-5, 1e-5, 0.00099999995, 9999999.5, 1e7, 1e22, 1e23, 1e-300,
+               5e-324, 1.7976931348623157e308, 1234567.5, 12345678.5, 999999.95, 0.1, 0.3]
+    columns = [rng.choice([-1, 1], n) * 10.0 ** rng.uniform(-30, 30, n), 1e-3 * rng.standard_normal(n),
+               np.arange(n) * 0.005, np.round(rng.standard_normal(n) * 1e4) / 2,
+               np.resize(np.array(special + [-v for v in special]), n)]
+    for values in columns:
+        table = values.reshape(-1, len(precisions))
+        assert csvtext.format_table(table, precisions) == _python_table(table, precisions)
+
+
+def test_format_table_leaves_what_it_cannot_write_to_python():
+    table = np.array([[1.0, np.nan], [np.inf, -2.5]])
+    assert csvtext.format_table(table, (7, 7)) == "1, nan\ninf, -2.5"
+    assert csvtext.format_table(np.array([[0.1]]), (17,)) == "0.10000000000000001"

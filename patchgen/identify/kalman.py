@@ -139,20 +139,27 @@ def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray
     lo = np.full(p0.size, -np.inf) if lower is None else np.asarray(lower, float)
     z_lo = (lo - p0) / scale
     bounds = [(None if not math.isfinite(b) else b, None) for b in z_lo]
-    last: dict[str, np.ndarray | float] = {}
+    seen: dict[bytes, float] = {}  # every point's value, by its bits: a point met again is not evaluated again
 
     def fz(z: np.ndarray) -> float:
-        v = nll(p0 + scale * z)
-        last["z"], last["f"] = z.copy(), v if math.isfinite(v) else UNUSABLE
-        return last["f"]
+        key = z.tobytes()
+        if key not in seen:
+            v = nll(p0 + scale * z)
+            seen[key] = v if math.isfinite(v) else UNUSABLE
+        return seen[key]
 
     def fz_many(Z: np.ndarray) -> np.ndarray:
-        v = nll_many(p0 + scale * Z) if nll_many is not None else np.array([nll(p) for p in p0 + scale * Z])
-        return np.where(np.isfinite(v), v, UNUSABLE)
+        keys = [z.tobytes() for z in Z]
+        new = [i for i, key in enumerate(keys) if key not in seen]
+        if new:
+            P = p0 + scale * Z[new]
+            v = nll_many(P) if nll_many is not None else np.array([nll(p) for p in P])
+            seen.update(zip((keys[i] for i in new), np.where(np.isfinite(v), v, UNUSABLE).tolist()))
+        return np.array([seen[key] for key in keys])
 
     def gradient(z: np.ndarray) -> np.ndarray:
         """Forward differences of step FD_STEP from the value the minimiser has just had at z."""
-        f0 = last["f"] if "z" in last and np.array_equal(last["z"], z) else fz(z)
+        f0 = fz(z)
         points = np.tile(z, (z.size, 1))
         points[np.diag_indices(z.size)] = z + FD_STEP
         return (fz_many(points) - f0) / ((z + FD_STEP) - z)

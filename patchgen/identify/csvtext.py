@@ -60,53 +60,54 @@ def _digits(values, precision, powers, digits, exponent, exact):
 
 
 @nb.njit(cache=True)
-def _write_digits(out, pos, d, count, drop_zeros, buf):
-    """The last ``count`` decimal digits of d into out at pos (trailing zeros left out with
-    drop_zeros; buf scratch); the new position."""
-    for j in range(count):
-        buf[count - 1 - j] = 48 + d % 10
-        d //= 10
-    n = count
-    if drop_zeros:
-        while n > 0 and buf[n - 1] == 48:
-            n -= 1
-    for j in range(n):
-        out[pos + j] = buf[j]
-    return pos + n
+def _put(out, pos, src, start, stop):
+    """src[start:stop] into out at pos; the new position."""
+    for j in range(start, stop):
+        out[pos] = src[j]
+        pos += 1
+    return pos
 
 
 @nb.njit(cache=True)
 def _cell(out, pos, negative, d, e, p, buf):
-    """One number by %g's rules from its p digits d and exponent e; the new position."""
+    """One number by %g's rules from its p digits d and exponent e (buf scratch); the new position."""
     if negative:
         out[pos] = 45
         pos += 1
     if d == 0:
         out[pos] = 48
         return pos + 1
-    if -4 <= e < p:
-        if e >= 0:
-            pos = _write_digits(out, pos, d // 10 ** (p - 1 - e), e + 1, False, buf)
-            rest = d % 10 ** (p - 1 - e)
-            if rest:
-                out[pos] = 46
-                pos = _write_digits(out, pos + 1, rest, p - 1 - e, True, buf)
-            return pos
+    for j in range(p):  # the digits, and where the last one not zero stands
+        buf[p - 1 - j] = 48 + d % 10
+        d //= 10
+    last = p - 1
+    while buf[last] == 48:
+        last -= 1
+    if 0 <= e < p:
+        pos = _put(out, pos, buf, 0, e + 1)
+        if last > e:
+            out[pos] = 46
+            pos = _put(out, pos + 1, buf, e + 1, last + 1)
+        return pos
+    if -4 <= e < 0:
         out[pos], out[pos + 1] = 48, 46
         pos += 2
         for _ in range(-e - 1):
             out[pos] = 48
             pos += 1
-        return _write_digits(out, pos, d, p, True, buf)
-    pos = _write_digits(out, pos, d // 10 ** (p - 1), 1, False, buf)
-    rest = d % 10 ** (p - 1)
-    if rest:
+        return _put(out, pos, buf, 0, last + 1)
+    pos = _put(out, pos, buf, 0, 1)
+    if last > 0:
         out[pos] = 46
-        pos = _write_digits(out, pos + 1, rest, p - 1, True, buf)
+        pos = _put(out, pos + 1, buf, 1, last + 1)
     out[pos], out[pos + 1] = 101, 45 if e < 0 else 43
     pos += 2
     a = abs(e)
-    return _write_digits(out, pos, a, 3 if a >= 100 else 2, False, buf)
+    if a >= 100:
+        out[pos] = 48 + a // 100
+        pos += 1
+    out[pos], out[pos + 1] = 48 + a // 10 % 10, 48 + a % 10
+    return pos + 2
 
 
 @nb.njit(cache=True)

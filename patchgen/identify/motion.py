@@ -39,20 +39,27 @@ def actuator_force(u: np.ndarray, act: BenchActuator, dt: float) -> np.ndarray:
     dz = act.dead_zone_V
     v = np.where(u > dz, u - dz, np.where(u < -dz, u + dz, 0.0))
     F = np.empty(u.size)
-    held = v[0]  # the command over the step that ends at each sample
-    x = v[0] if act.model == "lag_zero" else act.K_U * v[0]
+    model = 0 if act.model == "gain" or act.tau <= 0 else (1 if act.model == "lag" else 2)
     decay = math.exp(-dt / act.tau) if act.tau > 0 else 0.0
-    for k in range(u.size):
-        if act.model == "gain" or act.tau <= 0:
-            F[k] = act.K_U * held
-        elif act.model == "lag":
+    _actuator_steps(v, float(act.K_U), float(act.tau), decay, model, F)
+    return np.clip(F, -act.force_limit_N, act.force_limit_N)
+
+
+@nb.njit(**_JIT)
+def _actuator_steps(v, K_U, tau, decay, model, F):
+    """actuator_force's steps into F: model 0 a gain, 1 a lag, 2 a lag with a zero at the origin."""
+    held = v[0]  # the command over the step that ends at each sample
+    x = v[0] if model == 2 else K_U * v[0]
+    for k in range(v.size):
+        if model == 0:
+            F[k] = K_U * held
+        elif model == 1:
             F[k] = x
         else:
-            F[k] = act.K_U / act.tau * (held - x)
+            F[k] = K_U / tau * (held - x)
         held = v[k]
-        target = held if act.model == "lag_zero" else act.K_U * held
+        target = held if model == 2 else K_U * held
         x = target + (x - target) * decay
-    return np.clip(F, -act.force_limit_N, act.force_limit_N)
 
 
 def slide(plant: PlantParams, s0: float, v0: float, push: np.ndarray, h: float,

@@ -29,8 +29,7 @@ STEP_RANGE = (1e-6, 1e4)  # a difference step's variance, in the start's scales 
 # cannot shrink a step into rounding error
 UNUSABLE = 1e300  # what the minimiser sees where the likelihood cannot be evaluated (a filter that diverged)
 DOF_STEP = 0.5  # the largest step in a noise parameter (a log variance) when differentiating the covariance
-FD_STEP = 1e-8  # the minimiser's forward-difference step, in the start's scales (L-BFGS-B's own default: its
-# steps forward stay inside lower bounds, so none is turned back)
+FD_STEP = 1e-8  # the minimiser's forward-difference step, in the start's scales (L-BFGS-B's own default)
 
 
 FitError = lsq.FitError
@@ -158,11 +157,16 @@ def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray
         return np.array([seen[key] for key in keys])
 
     def gradient(z: np.ndarray) -> np.ndarray:
-        """Forward differences of step FD_STEP from the value the minimiser has just had at z."""
+        """Forward differences from the value the minimiser has just had at z, as L-BFGS-B takes
+        them itself: steps of FD_STEP, a relative step where z is so large that FD_STEP is lost to
+        rounding, turned back where it would cross a lower bound."""
         f0 = fz(z)
+        step = np.where((z + FD_STEP) - z == 0, math.sqrt(np.finfo(float).eps) * np.where(z >= 0, 1.0, -1.0)
+                        * np.maximum(1.0, np.abs(z)), FD_STEP)
+        step = np.where(z + step < z_lo, -step, step)
         points = np.tile(z, (z.size, 1))
-        points[np.diag_indices(z.size)] = z + FD_STEP
-        return (fz_many(points) - f0) / ((z + FD_STEP) - z)
+        points[np.diag_indices(z.size)] = z + step
+        return (fz_many(points) - f0) / ((z + step) - z)
 
     res = minimize(fz, np.zeros(p0.size), method="L-BFGS-B", jac=gradient, bounds=bounds,
                    options={"maxiter": 500, "ftol": 1e-10, "gtol": 1e-3, "maxcor": 20})

@@ -11,6 +11,7 @@ import re
 
 import numpy as np
 import pytest
+from scipy.optimize import minimize
 
 from patchgen.identify import csvtext, filters, kalman, lag_grid
 from patchgen.identify.cells import PLAIN, plain_lines
@@ -138,3 +139,21 @@ def test_format_table_leaves_what_it_cannot_write_to_python():
     table = np.array([[1.0, np.nan], [np.inf, -2.5]])
     assert csvtext.format_table(table, (7, 7)) == "1, nan\ninf, -2.5"
     assert csvtext.format_table(np.array([[0.1]]), (17,)) == "0.10000000000000001"
+
+
+def test_ml_fit_minimises_as_l_bfgs_b_with_its_own_differences():
+    f = lambda p: (p[0] - 1.0) ** 4 + 3 * (p[1] + 0.5) ** 2 + p[0] * p[1] + math.exp(0.3 * p[2]) - p[2]
+    f_many_calls = []
+
+    def f_many(P):
+        f_many_calls.append(len(P))
+        return np.array([f(p) for p in P])
+
+    p0, scale, lower = np.array([0.2, 0.1, 2.0]), np.array([0.5, 0.2, 1.0]), np.array([-np.inf, -0.3, 1.5])
+    fit = kalman.ml_fit(f, p0, scale, lower, covariance=False, nll_many=f_many)
+    z_lo = (lower - p0) / scale
+    ref = minimize(lambda z: f(p0 + scale * z), np.zeros(3), method="L-BFGS-B",
+                   bounds=[(None if not math.isfinite(b) else b, None) for b in z_lo],
+                   options={"maxiter": 500, "ftol": 1e-10, "gtol": 1e-3, "maxcor": 20})
+    assert np.array_equal(fit.p, p0 + scale * ref.x) and fit.nll == ref.fun
+    assert max(f_many_calls) == 3  # each gradient's points in one call

@@ -29,8 +29,8 @@ from patchgen.identify.cells import (
     MIN_SAMPLE_INTERVAL_S,
     flat_top,
     not_plain,
-    plain_lines,
     plain_number,
+    read_plain,
     signal_problem,
     unit_problem,
 )
@@ -271,12 +271,17 @@ def _numbers(source: str, names: list[str], rows: list[tuple[int, str]], data: n
 
 def _plain_block(names: list[str], rows: list[tuple[int, str]]) -> np.ndarray | None:
     """All rows at once when every line is exactly len(names) plain numbers (one pass of
-    patchgen.identify.cells.plain_lines and one conversion, ten times faster than cell by cell);
-    None to look cell by cell."""
+    patchgen.identify.cells.read_plain, which reads them too); None to look cell by cell."""
     block = "\n".join(ln for _, ln in rows)
-    if not rows or not block.isascii() or not plain_lines(np.frombuffer(block.encode("ascii"), np.uint8), len(names)):
+    if not rows or not block.isascii():
         return None
-    return np.array(block.replace("\n", ",").split(","), dtype=float).reshape(len(rows), len(names))
+    values = np.empty(len(rows) * len(names))
+    status = read_plain(np.frombuffer(block.encode("ascii"), np.uint8), len(names), values)
+    if status == 0:
+        return None
+    if status == 2:  # a number beyond the exact fast path: float reads them all
+        values = np.array(block.replace("\n", ",").split(","), dtype=float)
+    return values.reshape(len(rows), len(names))
 
 
 def _cell_by_cell(source: str, names: list[str], rows: list[tuple[int, str]]) -> np.ndarray:

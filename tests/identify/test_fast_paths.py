@@ -14,7 +14,7 @@ import pytest
 from scipy.optimize import minimize
 
 from patchgen.identify import csvtext, filters, kalman, lag_grid
-from patchgen.identify.cells import PLAIN, plain_lines
+from patchgen.identify.cells import PLAIN, plain_lines, read_plain
 
 ALPHABET = list("0123456789") * 3 + list(".+-eE ,\t\n") + ["x", "_", "#"]
 
@@ -157,3 +157,23 @@ def test_ml_fit_minimises_as_l_bfgs_b_with_its_own_differences():
                    options={"maxiter": 500, "ftol": 1e-10, "gtol": 1e-3, "maxcor": 20})
     assert np.array_equal(fit.p, p0 + scale * ref.x) and fit.nll == ref.fun
     assert max(f_many_calls) == 3  # each gradient's points in one call
+
+
+def test_read_plain_gives_what_float_gives():
+    rng = np.random.default_rng(12)
+    cells = [f"{v:.7g}" for v in rng.standard_normal(5000) * 10.0 ** rng.uniform(-12, 12, 5000)]
+    cells += [f"{v:.10g}" for v in np.arange(5000) * 0.005]
+    cells += ["0", "-0", "+0.0e3", ".5", "5.", "-.25E-2", " 7 ", "\t1e22", "1e23", "9007199254740993",
+              "123456789012345678901", "1e-400"]
+    want = [float(c) for c in cells]
+    values = np.empty(len(cells))
+    assert read_plain(np.frombuffer("\n".join(cells).encode(), np.uint8), 1, values) == 2  # some left to float
+    for cell, expected in zip(cells, want):
+        one = np.empty(1)
+        status = read_plain(np.frombuffer(cell.encode(), np.uint8), 1, one)
+        assert status in (1, 2)
+        if status == 1:
+            assert one[0] == expected and np.signbit(one[0]) == np.signbit(expected), cell
+    table = np.empty(4)
+    assert read_plain(np.frombuffer(b"1.5, -2\n3e-3,4", np.uint8), 2, table) == 1
+    assert list(table) == [1.5, -2.0, 3e-3, 4.0]

@@ -91,7 +91,7 @@ def fit_swing(rec: Recording, gain: float, g: float, force_bandwidth_Hz: float, 
     slope = (y[min(3, y.size - 1)] - y[0]) / (min(3, y.size - 1) * dt)
     p0 = np.array([2 * sig, w2_0, off0, (y[0] - off0) / gain, math.copysign(phi_amp * wd, slope)])
     scale = np.array([1e-3 * max(2 * sig, 1e-3), 1e-4 * w2_0, noise, noise / gain, noise / gain * wd])
-    first = lsq.fit(lambda p: free(p) - y, p0, scale)
+    first = lsq.fit(lambda p: free(p) - y, p0, scale, covariance=False)  # a start: its covariance ignores the torque
     r = float(np.var(free(first.p) - y))
     pred, terms = np.empty(t.size), np.empty(t.size)
 

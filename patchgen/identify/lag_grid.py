@@ -3,10 +3,10 @@ gain) and the gauge's zero by linear least squares in each cell, the cell of lea
 taken.
 
 The grid is searched cell by cell with numpy's least squares (``cell``). Most cells are far from
-the least, and a compiled pass (``approximate_rss``: the normal equations' coefficients, the sum of
-squares from their residuals) says so for all of them at once; only the cells it cannot tell from
-the least are searched cell by cell, in grid order, so that the start is the one the full search
-gives.
+the least, and a compiled pass (``approximate_rss``: the normal equations' coefficients and sum of
+squares, with a bound on its rounding) says so for all of them at once; only the cells it cannot
+tell from the least are searched cell by cell, in grid order, so that the start is the one the
+full search gives.
 """
 
 from __future__ import annotations
@@ -52,54 +52,57 @@ def cell(v: np.ndarray, f: np.ndarray, dt: float, tau: float, with_zero: bool) -
 
 
 @nb.njit(cache=True)
-def _columns(V, f, a, tau, with_zero, coef, G, b, rss):
+def _columns(V, f, a, tau, with_zero, G, b, ff):
     """For each row v of V: the cell's columns x = (the lag's state y, (previous v - y) / tau with
-    the zero, 1) run sample by sample; without coef their products into G and with f into b, with
-    coef the residual sum of squares into rss."""
-    k = 3 if with_zero else 2
+    the zero, 1) run sample by sample, their products into G, with f into b, and f'f into ff."""
     for r in range(V.shape[0]):
         y, prev = V[r, 0], V[r, 0]
-        syy = syz = sy = szz = sz = syf = szf = sf = total = 0.0
-        c0, c1, c2 = (0.0, 0.0, 0.0) if coef is None else (coef[r, 0], coef[r, 1], coef[r, k - 1])
+        syy = syz = sy = szz = sz = syf = szf = sf = sff = 0.0
         for s in range(f.size):
             z = (prev - y) / tau if with_zero else 0.0
-            if coef is None:
-                syy += y * y
-                syz += y * z
-                sy += y
-                szz += z * z
-                sz += z
-                syf += y * f[s]
-                szf += z * f[s]
-                sf += f[s]
-            else:
-                e = f[s] - c0 * y - c2 - (c1 * z if with_zero else 0.0)
-                total += e * e
+            syy += y * y
+            syz += y * z
+            sy += y
+            szz += z * z
+            sz += z
+            syf += y * f[s]
+            szf += z * f[s]
+            sf += f[s]
+            sff += f[s] * f[s]
             prev = V[r, s]
             y = a * y + (1.0 - a) * prev
-        rss[r] = total
-        if coef is None and with_zero:
+        ff[r] = sff
+        if with_zero:
             G[r, 0, 0], G[r, 0, 1], G[r, 0, 2], b[r, 0] = syy, syz, sy, syf
             G[r, 1, 0], G[r, 1, 1], G[r, 1, 2], b[r, 1] = syz, szz, sz, szf
             G[r, 2, 0], G[r, 2, 1], G[r, 2, 2], b[r, 2] = sy, sz, f.size, sf
-        elif coef is None:
+        else:
             G[r, 0, 0], G[r, 0, 1], b[r, 0] = syy, sy, syf
             G[r, 1, 0], G[r, 1, 1], b[r, 1] = sy, f.size, sf
 
 
-def approximate_rss(V: np.ndarray, f: np.ndarray, dt: float, tau: float, with_zero: bool) -> np.ndarray:
-    """About ``cell``'s sum of squares for each row of V at once: never below the least-squares
-    minimum, above it by the square of the coefficients' rounding; inf where the normal equations
-    are too ill-conditioned to say."""
+def approximate_rss(V: np.ndarray, f: np.ndarray, dt: float, tau: float, with_zero: bool
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """About ``cell``'s sum of squares for each row of V at once, and a bound on its rounding.
+
+    The coefficients c solve the normal equations (columns scaled to one); the sum of squares at
+    them, f'f - 2 c'b + c'G c, is never below the least-squares minimum and above it by the
+    square of their rounding. Its own rounding, the sums' over n samples and the expansion's, is
+    within 2 n eps (f'f + 2 sum |c_i| sqrt(G_ii f'f) + (sum |c_i| sqrt(G_ii))^2) (Cauchy-Schwarz
+    for the sums of |x_i f| and |x_i x_j|). inf where the normal equations are too
+    ill-conditioned to say."""
     k = 3 if with_zero else 2
-    G, b, rss = np.zeros((V.shape[0], k, k)), np.zeros((V.shape[0], k)), np.zeros(V.shape[0])
-    a = math.exp(-dt / tau)
-    _columns(V, f, a, tau, with_zero, None, G, b, rss)
+    G, b, ff = np.zeros((V.shape[0], k, k)), np.zeros((V.shape[0], k)), np.zeros(V.shape[0])
+    _columns(V, f, math.exp(-dt / tau), tau, with_zero, G, b, ff)
     d = np.sqrt(np.maximum(np.einsum("rii->ri", G), 1e-300))
     scaled = G / (d[:, :, None] * d[:, None, :])
     coef = (np.linalg.pinv(scaled) @ (b / d)[:, :, None])[:, :, 0] / d
-    _columns(V, f, a, tau, with_zero, coef, G, b, rss)
-    return np.where(np.linalg.cond(scaled) < CONDITION, rss, np.inf)
+    rss = ff - 2 * np.einsum("ri,ri->r", coef, b) + np.einsum("ri,rij,rj->r", coef, G, coef)
+    reach = np.einsum("ri,ri->r", np.abs(coef), d)
+    gamma = 2 * f.size * np.finfo(float).eps
+    bound = gamma * (ff + 2 * reach * np.sqrt(ff) + reach ** 2)
+    ok = np.linalg.cond(scaled) < CONDITION
+    return np.where(ok, rss, np.inf), np.where(ok, bound, np.inf)
 
 
 def grid_start(u: np.ndarray, f: np.ndarray, dt: float, with_zero: bool) -> np.ndarray:
@@ -108,11 +111,11 @@ def grid_start(u: np.ndarray, f: np.ndarray, dt: float, with_zero: bool) -> np.n
     umax = float(np.max(np.abs(u)))
     taus, dzs = np.geomspace(2 * MIN_TAU_S, 5.0, GRID_TAUS), np.linspace(0, 0.9 * umax, GRID_DEAD_ZONES)
     V = np.array([dead_zone(u, dz) for dz in dzs])
-    approx = np.array([approximate_rss(V, f, dt, tau, with_zero) for tau in taus])
+    approx, bound = np.array([approximate_rss(V, f, dt, tau, with_zero) for tau in taus]).transpose(1, 0, 2)
     finite = np.isfinite(approx)
-    low = np.min(approx[finite]) if np.any(finite) else np.inf
+    high = np.min((approx + bound)[finite]) if np.any(finite) else np.inf
     best = (np.inf, None)
-    for i, j in zip(*np.nonzero(~finite | (approx <= low * (1 + TIE)))):
+    for i, j in zip(*np.nonzero(~finite | (approx - bound <= high * (1 + TIE)))):
         rss, c = cell(V[j], f, dt, taus[i], with_zero)
         if rss < best[0]:
             best = (rss, (c[0], c[1] if with_zero else 0.0, taus[i], dzs[j], c[-1]))

@@ -107,10 +107,10 @@ def test_grid_start_is_the_cell_by_cell_search(with_zero):
     best = (np.inf, None)
     for tau in taus:
         V = np.array([lag_grid.dead_zone(u, dz) for dz in dzs])
-        approx = lag_grid.approximate_rss(V, f, dt, tau, with_zero)
-        for dz, a in zip(dzs, approx):
+        approx, bound = lag_grid.approximate_rss(V, f, dt, tau, with_zero)
+        for dz, a, e in zip(dzs, approx, bound):
             rss, c = lag_grid.cell(lag_grid.dead_zone(u, dz), f, dt, tau, with_zero)
-            assert a == pytest.approx(rss, rel=1e-9)
+            assert a == pytest.approx(rss, rel=1e-9) and abs(a - rss) <= e + 1e-12 * rss
             if rss < best[0]:
                 best = (rss, [c[0], c[1] if with_zero else 0.0, tau, dz, c[-1]])
     assert np.array_equal(lag_grid.grid_start(u, f, dt, with_zero), np.array(best[1]))

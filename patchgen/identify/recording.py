@@ -219,7 +219,7 @@ def parse_recording(text: str, source: str) -> Recording:
     while body and not body[-1]:
         body.pop()
     rows = list(zip(range(i + 2, i + 2 + len(body)), body))
-    data = _plain_block(names, rows)  # every line a row of numbers (the usual file) in one pass
+    data = _plain_block(len(names), body)  # every line a row of numbers (the usual file) in one pass
     if data is None:  # else rows are the lines that are neither blank nor comments
         rows = [(k + 1, ln) for k, ln in enumerate(lines) if k > i and ln.strip() and not ln.lstrip().startswith("#")]
     if len(rows) < kind.min_samples:
@@ -258,7 +258,7 @@ def _numbers(source: str, names: list[str], rows: list[tuple[int, str]], data: n
     """The rows' cells as numbers, each plain decimal (see patchgen.identify.cells); ``data``
     when they have been read already."""
     if data is None:
-        data = _plain_block(names, rows)
+        data = _plain_block(len(names), [ln for _, ln in rows])
     if data is None:
         data = _cell_by_cell(source, names, rows)
     for c, n in enumerate(names):
@@ -269,19 +269,19 @@ def _numbers(source: str, names: list[str], rows: list[tuple[int, str]], data: n
     return data
 
 
-def _plain_block(names: list[str], rows: list[tuple[int, str]]) -> np.ndarray | None:
-    """All rows at once when every line is exactly len(names) plain numbers (one pass of
+def _plain_block(ncols: int, lines: list[str]) -> np.ndarray | None:
+    """All lines at once when each is exactly ncols plain numbers (one pass of
     patchgen.identify.cells.read_plain, which reads them too); None to look cell by cell."""
-    block = "\n".join(ln for _, ln in rows)
-    if not rows or not block.isascii():
+    block = "\n".join(lines)
+    if not lines or not block.isascii():
         return None
-    values = np.empty(len(rows) * len(names))
-    status = read_plain(np.frombuffer(block.encode("ascii"), np.uint8), len(names), values)
+    values = np.empty(len(lines) * ncols)
+    status = read_plain(np.frombuffer(block.encode("ascii"), np.uint8), ncols, values)
     if status == 0:
         return None
     if status == 2:  # a number beyond the exact fast path: float reads them all
         values = np.array(block.replace("\n", ",").split(","), dtype=float)
-    return values.reshape(len(rows), len(names))
+    return values.reshape(len(lines), ncols)
 
 
 def _cell_by_cell(source: str, names: list[str], rows: list[tuple[int, str]]) -> np.ndarray:

@@ -15,11 +15,12 @@ covariance (patchgen.identify.lsq).
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 
 from patchgen.identify import lsq
 from patchgen.identify.estimate import LSQ_HAC, Z_REJECT, Check, Panel, TestFit, normal
-from patchgen.identify.lag_grid import MIN_TAU_S, dead_zone, grid_start, lag_state, previous
+from patchgen.identify.lag_grid import MIN_TAU_S, dead_value, dead_zone, grid_start, lag_state
 from patchgen.identify.recording import Recording
 
 RESPONSE_SNR = 20.0  # the force must move this many noise levels for a test to excite the actuator
@@ -30,9 +31,36 @@ TRAVEL_WINDOW = 0.002  # of a ramp's samples: the command is smoothed over this 
 def force_model(p: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
     """(K_U + K_Z s) / (tau s + 1) after the dead zone, plus the gauge's zero; p = K_U, K_Z, tau, dz, F0."""
     K, KZ, tau, dz, F0 = p
-    v = dead_zone(u, dz)
-    y = lag_state(v, dt, tau)
-    return K * y + KZ / tau * (previous(v) - y) + F0
+    out = np.empty(u.size)
+    _force(np.ascontiguousarray(u, dtype=float), dz, np.exp(-dt / tau), K, KZ / tau, F0, out)
+    return out
+
+
+@nb.njit(cache=True)
+def _force(u, dz, a, K, KZ_tau, F0, out):
+    """force_model sample by sample: K y + K_Z / tau (v delayed one sample - y) + F0, v the command
+    after the dead zone and y its lag (patchgen.identify.lag_grid.lag_filter), each by the same
+    operations as dead_zone, lag_state and previous."""
+    b0, b1, a1 = 0.0, 1.0 - a, -a
+    z = prev = dead_value(u[0], dz)
+    for k in range(u.size):
+        v = dead_value(u[k], dz)
+        y = z + b0 * v
+        z = v * b1 - y * a1
+        out[k] = K * y + KZ_tau * (prev - y) + F0
+        prev = v
+
+
+@nb.njit(cache=True)
+def _ramp_force(u, shift, dz, a, K, F0, out):
+    """ramp_model sample by sample: K y + F0, y the lag of u - shift after the dead zone."""
+    b0, b1, a1 = 0.0, 1.0 - a, -a
+    z = dead_value(u[0] - shift[0], dz)
+    for k in range(u.size):
+        v = dead_value(u[k] - shift[k], dz)
+        y = z + b0 * v
+        z = v * b1 - y * a1
+        out[k] = K * y + F0
 
 
 def _noise(f: np.ndarray) -> float:
@@ -142,8 +170,10 @@ def fit_step(rec: Recording) -> TestFit:
 def ramp_model(p: np.ndarray, u: np.ndarray, direction: np.ndarray, dt: float) -> np.ndarray:
     """K_U / (tau s + 1) after a dead zone shifted by h/2 along the command's travel; p = K_U, tau, dz, F0, h."""
     K, tau, dz, F0, h = p
-    v = dead_zone(u - 0.5 * h * direction, dz)
-    return K * lag_state(v, dt, tau) + F0
+    out = np.empty(u.size)
+    _ramp_force(np.ascontiguousarray(u, dtype=float), np.ascontiguousarray(0.5 * h * direction, dtype=float), dz,
+                np.exp(-dt / tau), K, F0, out)
+    return out
 
 
 def travel(u: np.ndarray) -> np.ndarray:

@@ -15,7 +15,6 @@ import math
 
 import numba as nb
 import numpy as np
-from scipy.signal import lfilter
 
 from patchgen.identify.lsq import FitError
 
@@ -30,10 +29,28 @@ def dead_zone(u: np.ndarray, half_width: float) -> np.ndarray:
     return np.where(u > half_width, u - half_width, np.where(u < -half_width, u + half_width, 0.0))
 
 
+@nb.njit(cache=True)
+def dead_value(x, half_width):
+    """dead_zone of one value."""
+    return x - half_width if x > half_width else (x + half_width if x < -half_width else 0.0)
+
+
 def lag_state(v: np.ndarray, dt: float, tau: float) -> np.ndarray:
     """The lag 1 / (tau s + 1) of v held over each interval, sampled before each update, from rest at v[0]."""
-    a = np.exp(-dt / tau)
-    return lfilter([0.0, 1.0 - a], [1.0, -a], v, zi=[v[0]])[0]
+    out = np.empty(len(v))
+    lag_filter(np.ascontiguousarray(v, dtype=float), np.exp(-dt / tau), out)
+    return out
+
+
+@nb.njit(cache=True)
+def lag_filter(v, a, out):
+    """scipy.signal.lfilter([0, 1 - a], [1, -a], v, zi=[v[0]]) into out, its transposed direct form
+    operation for operation (the same bits, without its call's overhead)."""
+    b0, b1, a1 = 0.0, 1.0 - a, -a
+    z = v[0]
+    for k in range(v.size):
+        out[k] = z + b0 * v[k]
+        z = v[k] * b1 - out[k] * a1
 
 
 def previous(v: np.ndarray) -> np.ndarray:

@@ -12,8 +12,9 @@ import re
 import numpy as np
 import pytest
 from scipy.optimize import minimize
+from scipy.signal import lfilter
 
-from patchgen.identify import csvtext, filters, kalman, lag_grid
+from patchgen.identify import actuator, csvtext, filters, kalman, lag_grid
 from patchgen.identify.cells import PLAIN, plain_lines, read_plain
 
 ALPHABET = list("0123456789") * 3 + list(".+-eE ,\t\n") + ["x", "_", "#"]
@@ -177,3 +178,21 @@ def test_read_plain_gives_what_float_gives():
     table = np.empty(4)
     assert read_plain(np.frombuffer(b"1.5, -2\n3e-3,4", np.uint8), 2, table) == 1
     assert list(table) == [1.5, -2.0, 3e-3, 4.0]
+
+
+def test_actuator_models_are_their_numpy_form_to_the_bit():
+    rng = np.random.default_rng(13)
+    dt, u = 0.005, np.repeat(rng.uniform(-2, 2, 30), 100) + 0.01 * rng.standard_normal(3000)
+    direction = np.sign(rng.standard_normal(u.size))
+    for K, KZ, tau, dz, F0, h in [(9.0, 0.3, 0.2, 0.3, 0.05, 0.04), (-3.0, 0.0, 2e-4, 0.0, 0.0, 0.0),
+                                  (11.0, -1.0, 4.0, 1.5, -0.2, -0.1)]:
+        a = np.exp(-dt / tau)
+        v = np.where(u > dz, u - dz, np.where(u < -dz, u + dz, 0.0))
+        y = lfilter([0.0, 1.0 - a], [1.0, -a], v, zi=[v[0]])[0]
+        assert np.array_equal(lag_grid.lag_state(v, dt, tau), y)
+        expected = K * y + KZ / tau * (np.concatenate([v[:1], v[:-1]]) - y) + F0
+        assert np.array_equal(actuator.force_model(np.array([K, KZ, tau, dz, F0]), u, dt), expected)
+        w = u - 0.5 * h * direction
+        v = np.where(w > dz, w - dz, np.where(w < -dz, w + dz, 0.0))
+        expected = K * lfilter([0.0, 1.0 - a], [1.0, -a], v, zi=[v[0]])[0] + F0
+        assert np.array_equal(actuator.ramp_model(np.array([K, tau, dz, F0, h]), u, direction, dt), expected)

@@ -15,43 +15,52 @@ covariance (patchgen.identify.lsq).
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
-from scipy.signal import lfilter
 
 from patchgen.identify import lsq
 from patchgen.identify.estimate import LSQ_HAC, Z_REJECT, Check, Panel, TestFit, normal
-from patchgen.identify.lsq import FitError
+from patchgen.identify.lag_grid import MIN_TAU_S, dead_value, dead_zone, grid_start, lag_state
 from patchgen.identify.recording import Recording
 
-MIN_TAU_S = 1e-4  # s: the fit's floor for the lag (a shorter one is a gain at any sample rate used)
 RESPONSE_SNR = 20.0  # the force must move this many noise levels for a test to excite the actuator
 LEVEL_TOLERANCE_V = 0.02  # V: command levels closer than this are one level
-GRID_TAUS, GRID_DEAD_ZONES = 18, 14  # the start's grid: lags from 0.2 ms to 5 s, dead zones to 90 % of the command
 TRAVEL_WINDOW = 0.002  # of a ramp's samples: the command is smoothed over this before its direction is read
-
-
-def dead_zone(u: np.ndarray, half_width: float) -> np.ndarray:
-    """The command after the dead zone: u - w above w, u + w below -w, 0 between."""
-    return np.where(u > half_width, u - half_width, np.where(u < -half_width, u + half_width, 0.0))
-
-
-def lag_state(v: np.ndarray, dt: float, tau: float) -> np.ndarray:
-    """The lag 1 / (tau s + 1) of v held over each interval, sampled before each update, from rest at v[0]."""
-    a = np.exp(-dt / tau)
-    return lfilter([0.0, 1.0 - a], [1.0, -a], v, zi=[v[0]])[0]
-
-
-def previous(v: np.ndarray) -> np.ndarray:
-    """v delayed one sample (the command held over the interval that ends at each sample)."""
-    return np.concatenate([v[:1], v[:-1]])
 
 
 def force_model(p: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
     """(K_U + K_Z s) / (tau s + 1) after the dead zone, plus the gauge's zero; p = K_U, K_Z, tau, dz, F0."""
     K, KZ, tau, dz, F0 = p
-    v = dead_zone(u, dz)
-    y = lag_state(v, dt, tau)
-    return K * y + KZ / tau * (previous(v) - y) + F0
+    out = np.empty(u.size)
+    _force(np.ascontiguousarray(u, dtype=float), dz, np.exp(-dt / tau), K, KZ / tau, F0, out)
+    return out
+
+
+@nb.njit(cache=True)
+def _force(u, dz, a, K, KZ_tau, F0, out):
+    """force_model sample by sample: K y + K_Z / tau (v delayed one sample - y) + F0, v the command
+    after the dead zone and y its lag (patchgen.identify.lag_grid.lag_filter), each by the same
+    operations as dead_zone, lag_state and previous."""
+    b0, b1, a1 = 0.0, 1.0 - a, -a
+    z = prev = dead_value(u[0], dz)
+    for k in range(u.size):
+        v = dead_value(u[k], dz)
+        y = z + b0 * v
+        z = v * b1 - y * a1
+        out[k] = K * y + KZ_tau * (prev - y) + F0
+        prev = v
+
+
+@nb.njit(cache=True)
+def _ramp_force(u, shift, dz, a, K, F0, out):
+    """ramp_model sample by sample: K y + F0, y the lag of u - shift after the dead zone."""
+    b0, b1, a1 = 0.0, 1.0 - a, -a
+    z = dead_value(u[0] - shift[0], dz)
+    for k in range(u.size):
+        v = dead_value(u[k] - shift[k], dz)
+        y = z + b0 * v
+        z = v * b1 - y * a1
+        out[k] = K * y + F0
 
 
 def _noise(f: np.ndarray) -> float:
@@ -76,25 +85,6 @@ def _levels(u: np.ndarray) -> list[float]:
         if not lv or x - lv[-1] > LEVEL_TOLERANCE_V:
             lv.append(float(x))
     return lv
-
-
-def _grid_start(u, f, dt, with_zero: bool) -> np.ndarray:
-    """(K_U, K_Z, tau, dz, F0) from a grid over tau and dz, the rest by linear least squares."""
-    best = (np.inf, None)
-    umax = float(np.max(np.abs(u)))
-    for tau in np.geomspace(2 * MIN_TAU_S, 5.0, GRID_TAUS):
-        for dz in np.linspace(0, 0.9 * umax, GRID_DEAD_ZONES):
-            v = dead_zone(u, dz)
-            y = lag_state(v, dt, tau)
-            cols = [y, (previous(v) - y) / tau, np.ones_like(y)] if with_zero else [y, np.ones_like(y)]
-            A = np.column_stack(cols)
-            c, *_ = np.linalg.lstsq(A, f, rcond=None)
-            rss = float(np.sum((A @ c - f) ** 2))
-            if rss < best[0]:
-                best = (rss, (c[0], c[1] if with_zero else 0.0, tau, dz, c[-1]))
-    if best[1] is None:
-        raise FitError("no start for the fit: the force is not finite against any lag and dead zone")
-    return np.array(best[1])
 
 
 def _scales(p: np.ndarray) -> np.ndarray:
@@ -125,7 +115,7 @@ def fit_step(rec: Recording) -> TestFit:
         raise rec.error("u_c_V", f"the command steps to one level only ({_levels(u)[0]:.3g} V): K_U and the dead "
                                  "zone need steps to at least two levels")
     _excited(rec, u, f)
-    start = _grid_start(u, f, dt, True)
+    start = grid_start(u, f, dt, True)
     scale = _scales(start)
     general = lsq.fit(lambda p: force_model(p, u, dt) - f, start, scale,
                       bounds=([-np.inf, -np.inf, MIN_TAU_S, 0, -np.inf], np.inf))
@@ -180,8 +170,10 @@ def fit_step(rec: Recording) -> TestFit:
 def ramp_model(p: np.ndarray, u: np.ndarray, direction: np.ndarray, dt: float) -> np.ndarray:
     """K_U / (tau s + 1) after a dead zone shifted by h/2 along the command's travel; p = K_U, tau, dz, F0, h."""
     K, tau, dz, F0, h = p
-    v = dead_zone(u - 0.5 * h * direction, dz)
-    return K * lag_state(v, dt, tau) + F0
+    out = np.empty(u.size)
+    _ramp_force(np.ascontiguousarray(u, dtype=float), np.ascontiguousarray(0.5 * h * direction, dtype=float), dz,
+                np.exp(-dt / tau), K, F0, out)
+    return out
 
 
 def travel(u: np.ndarray) -> np.ndarray:
@@ -218,7 +210,7 @@ def fit_ramp(rec: Recording) -> TestFit:
                                  f"{np.max(u):.3g} V): a ramp through zero sees both edges of the dead zone")
     _excited(rec, u, f)
     direction = travel(u)
-    s = _grid_start(u, f, dt, False)
+    s = grid_start(u, f, dt, False)
     start = np.array([s[0], s[2], s[3], s[4], 0.0])
     scale = np.array([1e-2 * max(abs(s[0]), 1e-3), 1e-2 * max(s[2], 1e-3), 1e-2, 1e-2 * abs(s[0]), 1e-2])
     lo = [-np.inf, MIN_TAU_S, 0, -np.inf, -np.inf]

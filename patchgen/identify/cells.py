@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 import re
 
+import numba as nb
 import numpy as np
 
 PLAIN = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
@@ -99,3 +100,105 @@ def flat_top(x: np.ndarray, settles: bool = False) -> tuple[int, int, float] | N
     if length[k] >= CLIP_RUN and length[k] >= CLIP_CONTRAST * longest_inner:
         return int(start[k]), int(length[k]), float(value[k])
     return None
+
+
+EXACT_DIGITS = 2 ** 53  # a decimal mantissa up to this is a double exactly ...
+EXACT_POWERS = np.array([10.0 ** k for k in range(23)])  # ... and so is 10^k up to 10^22
+
+
+@nb.njit(cache=True)
+def read_plain(text: np.ndarray, ncols: int, out: np.ndarray) -> int:
+    """Read ``text`` (ASCII codes) as lines of exactly ncols cells, each a plain number (PLAIN)
+    with spaces or tabs about it, separated by commas; the lines separated by newlines, no
+    newline after the last: PLAIN's language by its automaton in one pass (a regular expression
+    over a whole recording takes tens of milliseconds).
+
+    The values go into ``out`` (row by row, as many as it holds). A mantissa of at most 2^53 and
+    a power of ten of at most 10^22 are both exact doubles, so one multiplication or division
+    gives the correctly rounded value, the one ``float`` gives (Clinger 1990); a number beyond
+    that is left to ``float``.
+
+    Returns
+    -------
+    int
+        0 when the text is not such lines, 1 when every value is in ``out``, 2 when some value
+        needs ``float``.
+    """
+    # 0 before a number, 1 after its sign, 2 integer digits, 3 a point after digits and any
+    # digits after it, 4 a point without digits before it, 5 digits after such a point,
+    # 6 after e, 7 after the exponent's sign, 8 exponent digits, 9 spaces after a number
+    state, col, k, status = 0, 0, 0, 1
+    negative, mantissa, digits, fraction, power, power_negative = False, 0, 0, 0, 0, False
+    for i in range(text.size + 1):
+        c = text[i] if i < text.size else 10  # the text ends as a line does
+        if c == 32 or c == 9:
+            if state == 0 or state == 9:
+                continue
+            if state == 2 or state == 3 or state == 5 or state == 8:
+                state = 9
+                continue
+            return 0
+        if 48 <= c <= 57:
+            if state <= 5:
+                if state <= 2:
+                    state = 2
+                elif state == 4:
+                    state = 5
+                if state == 3 or state == 5:
+                    fraction += 1
+                if mantissa > 0 or c > 48:
+                    digits += 1
+                    if digits <= 18:
+                        mantissa = 10 * mantissa + (c - 48)
+            elif state <= 8:
+                state = 8
+                power = min(10 * power + (c - 48), 100000)
+            else:
+                return 0
+        elif c == 46:
+            if state <= 1:
+                state = 4
+            elif state == 2:
+                state = 3
+            else:
+                return 0
+        elif c == 43 or c == 45:
+            if state == 0:
+                state, negative = 1, c == 45
+            elif state == 6:
+                state, power_negative = 7, c == 45
+            else:
+                return 0
+        elif c == 101 or c == 69:
+            if state == 2 or state == 3 or state == 5:
+                state = 6
+            else:
+                return 0
+        elif c == 44 or c == 10:
+            if not (state == 2 or state == 3 or state == 5 or state == 8 or state == 9):
+                return 0
+            if c == 44:
+                if col == ncols - 1:
+                    return 0
+                col += 1
+            else:
+                if col != ncols - 1:
+                    return 0
+                col = 0
+            e10 = (-power if power_negative else power) - fraction
+            if digits > 18 or mantissa > EXACT_DIGITS or abs(e10) > 22:
+                status = 2
+            elif k < out.size:
+                v = mantissa * EXACT_POWERS[e10] if e10 >= 0 else mantissa / EXACT_POWERS[-e10]
+                out[k] = -v if negative else v
+            k += 1
+            state, negative, mantissa, digits, fraction, power, power_negative = 0, False, 0, 0, 0, 0, False
+        else:
+            return 0
+    return status
+
+
+@nb.njit(cache=True)
+def plain_lines(text: np.ndarray, ncols: int) -> bool:
+    """Whether ``text`` (ASCII codes) is lines of exactly ncols plain numbers (read_plain)."""
+    return read_plain(text, ncols, np.empty(0)) != 0

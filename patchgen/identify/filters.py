@@ -209,43 +209,94 @@ def swing_nll(y, dt, beta, w2, gam, lam, q, r, gain, offset, phi0, om0, pred, co
     """-log-likelihood of the angle pot's voltage y = gain phi + offset + e (variance r) for the
     swing (swing_step) whose random torque is an Ornstein-Uhlenbeck process of intensity q
     (extended Kalman filter; the torque starts from its stationary spread). Predictions into
-    pred, each sample's term into contrib."""
+    pred, each sample's term into contrib.
+
+    The covariance P and the transition Phi are held in scalars (registers), each entry computed
+    by the same operations in the same order as the 3 x 3 products written out in _propagate."""
     x0, x1, x2 = phi0, om0, 0.0
-    P = np.zeros((3, 3))
-    P[2, 2] = q / (2 * lam)
+    p00, p01, p02, p10, p11, p12, p20, p21, p22 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, q / (2 * lam)
     Q = _swing_noise(beta, w2, lam, q, dt)
-    T = np.zeros((3, 3))
-    Phi = np.zeros((3, 3))
+    q00, q01, q02, q10, q11, q12, q20, q21, q22 = (Q[0, 0], Q[0, 1], Q[0, 2], Q[1, 0], Q[1, 1], Q[1, 2],
+                                                   Q[2, 0], Q[2, 1], Q[2, 2])
     # Phi = I + F dt + (F dt)^2 / 2 + (F dt)^3 / 6 with F = [[0, 1, 0], [a, -beta, 1], [0, 0, -lam]],
-    # a = -w2 cos(phi): its entries are polynomials in a, written out
+    # a = -w2 cos(phi): its entries are polynomials in a, written out (F^2, F^3 by hand)
     h1, h2, h3 = dt, dt * dt / 2.0, dt ** 3 / 6.0
+    b, l_ = -beta, -lam
+    bb, bl, ll, b3, l3 = b * b, b + l_, l_ * l_, b ** 3, l_ ** 3
+    bbl = b * l_
+    phi02 = 0.0 + 0.0 * h1 + 1.0 * h2 + bl * h3
+    phi12 = 0.0 + 1.0 * h1 + bl * h2
+    phi20 = 0.0 + 0.0 * h1 + 0.0 * h2 + 0.0 * h3
+    phi21 = 0.0 + 0.0 * h1 + 0.0 * h2 + 0.0 * h3
+    phi22 = 1.0 + l_ * h1 + ll * h2 + l3 * h3
     total = 0.0
     for t in range(y.size):
         pred[t] = gain * x0 + offset
-        s = gain * gain * P[0, 0] + r
+        s = gain * gain * p00 + r
         e = y[t] - pred[t]
         contrib[t] = 0.5 * (math.log(s) + e * e / s)
         total += contrib[t]
-        k0, k1, k2 = P[0, 0] * gain / s, P[1, 0] * gain / s, P[2, 0] * gain / s
+        k0, k1, k2 = p00 * gain / s, p10 * gain / s, p20 * gain / s
         x0 += k0 * e
         x1 += k1 * e
         x2 += k2 * e
-        r0, r1, r2 = gain * P[0, 0], gain * P[0, 1], gain * P[0, 2]
-        for j in range(3):
-            rj = r0 if j == 0 else (r1 if j == 1 else r2)
-            P[0, j] -= k0 * rj
-            P[1, j] -= k1 * rj
-            P[2, j] -= k2 * rj
+        r0, r1, r2 = gain * p00, gain * p01, gain * p02
+        p00 -= k0 * r0
+        p10 -= k1 * r0
+        p20 -= k2 * r0
+        p01 -= k0 * r1
+        p11 -= k1 * r1
+        p21 -= k2 * r1
+        p02 -= k0 * r2
+        p12 -= k1 * r2
+        p22 -= k2 * r2
         a = -w2 * math.cos(x0)
-        b, l_ = -beta, -lam
-        # F^2 and F^3, by hand
-        f2 = ((a, b, 1.0), (a * b, a + b * b, b + l_), (0.0, 0.0, l_ * l_))
-        f3 = ((a * b, a + b * b, b + l_), (a * a + a * b * b, 2 * a * b + b ** 3, a + b * b + b * l_ + l_ * l_),
-              (0.0, 0.0, l_ ** 3))
-        f1 = ((0.0, 1.0, 0.0), (a, b, 1.0), (0.0, 0.0, l_))
-        for i in range(3):
-            for j in range(3):
-                Phi[i, j] = (1.0 if i == j else 0.0) + f1[i][j] * h1 + f2[i][j] * h2 + f3[i][j] * h3
+        ab = a * b
+        phi00 = 1.0 + 0.0 * h1 + a * h2 + ab * h3
+        phi01 = 0.0 + 1.0 * h1 + b * h2 + (a + bb) * h3
+        phi10 = 0.0 + a * h1 + ab * h2 + (a * a + a * b * b) * h3
+        phi11 = 1.0 + b * h1 + (a + bb) * h2 + (2 * a * b + b3) * h3
+        phi12_t = phi12 + (a + bb + bbl + ll) * h3
         x0, x1, x2 = swing_step(x0, x1, x2, beta, w2, gam, lam, dt)
-        _propagate(Phi, P, T, Q)
+        # P <- Phi P Phi' + Q, as _propagate
+        t00 = phi00 * p00 + phi01 * p10 + phi02 * p20
+        t01 = phi00 * p01 + phi01 * p11 + phi02 * p21
+        t02 = phi00 * p02 + phi01 * p12 + phi02 * p22
+        t10 = phi10 * p00 + phi11 * p10 + phi12_t * p20
+        t11 = phi10 * p01 + phi11 * p11 + phi12_t * p21
+        t12 = phi10 * p02 + phi11 * p12 + phi12_t * p22
+        t20 = phi20 * p00 + phi21 * p10 + phi22 * p20
+        t21 = phi20 * p01 + phi21 * p11 + phi22 * p21
+        t22 = phi20 * p02 + phi21 * p12 + phi22 * p22
+        p00 = t00 * phi00 + t01 * phi01 + t02 * phi02 + q00
+        p01 = t00 * phi10 + t01 * phi11 + t02 * phi12_t + q01
+        p02 = t00 * phi20 + t01 * phi21 + t02 * phi22 + q02
+        p10 = t10 * phi00 + t11 * phi01 + t12 * phi02 + q10
+        p11 = t10 * phi10 + t11 * phi11 + t12 * phi12_t + q11
+        p12 = t10 * phi20 + t11 * phi21 + t12 * phi22 + q12
+        p20 = t20 * phi00 + t21 * phi01 + t22 * phi02 + q20
+        p21 = t20 * phi10 + t21 * phi11 + t22 * phi12_t + q21
+        p22 = t20 * phi20 + t21 * phi21 + t22 * phi22 + q22
     return total
+
+
+@nb.njit(**_JIT)
+def swing_nll_many(y, dt, lam, gain, P, pred, contrib, out):
+    """swing_nll at each row of P, (beta, w2, offset, phi0, om0, log q, log r[, gam]), into out: the
+    many points of a finite-difference gradient or curvature in one call. pred and contrib hold
+    the last row's."""
+    for i in range(P.shape[0]):
+        gam = P[i, 7] if P.shape[1] > 7 else 0.0
+        out[i] = swing_nll(y, dt, P[i, 0], P[i, 1], gam, lam, math.exp(P[i, 5]), math.exp(P[i, 6]), gain, P[i, 2],
+                           P[i, 3], P[i, 4], pred, contrib)
+
+
+@nb.njit(**_JIT)
+def coast_nll_many(z, w, dt, lam, sign, nfix, P, pred, contrib, out):
+    """coast_nll at each row of P, (a, rho, z0, w0, offset, log q, log r1, log r2[, f]) with f (0
+    without) the Coulomb friction in the coast's direction ``sign``, into out. pred and contrib
+    hold the last row's."""
+    for i in range(P.shape[0]):
+        f = P[i, 8] if P.shape[1] > 8 else 0.0
+        out[i] = coast_nll(z, w, dt, P[i, 0], f * sign, P[i, 1], math.exp(P[i, 5]), lam, math.exp(P[i, 6]),
+                           math.exp(P[i, 7]), P[i, 4], P[i, 2], P[i, 3], sign, nfix, pred, contrib)

@@ -114,13 +114,18 @@ def fit_coast(rec: Recording, force_bandwidth_Hz: float) -> TestFit:
     pred, terms = np.empty(t.size), np.empty(t.size)
     lam = 4.0 * force_bandwidth_Hz
 
-    def nll(p: np.ndarray) -> float:
-        a, f, rho, z0, w0, off, lq, lr1, lr2 = p
-        return filters.coast_nll(z, w, dt, a, f * sign, rho, math.exp(lq), lam, math.exp(lr1), math.exp(lr2), off,
-                                 z0, w0, sign, restricted[0], pred, terms)
+    # the parameters in the order a, rho, z0, w0, offset, log q, log r1, log r2, then f when fitted
+    def f_many(P: np.ndarray) -> np.ndarray:
+        out = np.empty(P.shape[0])
+        filters.coast_nll_many(z, w, dt, lam, sign, restricted[0], np.ascontiguousarray(P, dtype=float), pred, terms,
+                               out)
+        return out
 
-    def per_sample(p: np.ndarray) -> np.ndarray:
-        nll(p)
+    def f_nll(q: np.ndarray) -> float:
+        return float(f_many(q[None, :])[0])
+
+    def f_terms(q: np.ndarray) -> np.ndarray:
+        f_nll(q)
         return terms.copy()
 
     resid = oe(first.p)
@@ -133,14 +138,12 @@ def fit_coast(rec: Recording, force_bandwidth_Hz: float) -> TestFit:
     s0 = np.concatenate([np.maximum(np.sqrt(np.clip(np.diag(first.cov), 0.0, None)), 1e-3 * np.abs(scale)),
                          [0.3, 0.05, 0.05]])
     lower = np.concatenate([[1e-6, -np.inf, -np.inf, -np.inf, -np.inf, -np.inf], lo_noise])
-    # viscous alone first (f = 0), then the likelihood-ratio test of Coulomb friction; the
-    # parameters in the order a, rho, z0, w0, offset, log q, log r1, log r2 (then f)
+    # viscous alone first (f = 0), then the likelihood-ratio test of Coulomb friction
     keep = [0, 2, 3, 4, 5, 6, 7, 8]
     with_f = lambda q: np.insert(q[:8], 1, q[8] if q.size > 8 else 0.0)
-    f_nll, f_terms = lambda q: nll(with_f(q)), lambda q: per_sample(with_f(q))
-    fit = kalman.ml_fit(f_nll, p0[keep], s0[keep], lower[keep], per_sample=f_terms, noise=NOISE)
+    fit = kalman.ml_fit(f_nll, p0[keep], s0[keep], lower[keep], per_sample=f_terms, noise=NOISE, nll_many=f_many)
     f_scale = max(fit.p[0], 1e-3) * abs(w[0])
-    both, zc = kalman.added_term(f_nll, fit, s0[keep], 0.1 * f_scale, lower[keep])
+    both, zc = kalman.added_term(f_nll, fit, s0[keep], 0.1 * f_scale, lower[keep], f_many)
     coulomb = zc > Z_REJECT  # friction opposes the motion: a negative f is no friction
     checks = [Check("Coulomb friction", zc, Z_REJECT, coulomb,
                     f"likelihood-ratio z = {zc:.3g} for a constant friction force: " +
@@ -150,8 +153,8 @@ def fit_coast(rec: Recording, force_bandwidth_Hz: float) -> TestFit:
         se = np.sqrt(np.diag(fit.cov))
         restricted[0] = RESTRICTED + 1  # f enters linearly too
         fit = kalman.ml_fit(f_nll, both, np.append(np.where(se > 0, se, s0[keep]), 0.1 * f_scale),
-                            np.append(lower[keep], -np.inf), per_sample=f_terms, noise=NOISE)
-    nll(with_f(fit.p))
+                            np.append(lower[keep], -np.inf), per_sample=f_terms, noise=NOISE, nll_many=f_many)
+    f_nll(fit.p)
     est = {name: normal(fit.p[i], fit.se(i), unit, ML_KALMAN, rec.source, fit.dof_of(i))
            for name, i, unit in (("decay", 0, "1/s"), ("rho", 1, "1/s"), ("tach_offset", 4, "V"))}
     if coulomb:

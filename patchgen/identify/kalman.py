@@ -29,6 +29,7 @@ STEP_RANGE = (1e-6, 1e4)  # a difference step's variance, in the start's scales 
 # cannot shrink a step into rounding error
 UNUSABLE = 1e300  # what the minimiser sees where the likelihood cannot be evaluated (a filter that diverged)
 DOF_STEP = 0.5  # the largest step in a noise parameter (a log variance) when differentiating the covariance
+FD_STEP = 1e-8  # the minimiser's forward-difference step, in the start's scales (L-BFGS-B's own default)
 
 
 FitError = lsq.FitError
@@ -69,26 +70,35 @@ class MlFit:
         return self.dof(np.eye(self.p.size)[i])
 
 
-def hessian(f: Callable[[np.ndarray], float], p: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """The curvature of f at p by central differences of steps h."""
+def hessian(f_many: Callable[[np.ndarray], np.ndarray], p: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """The curvature at p by central differences of steps h, of f_many (points in rows -> values),
+    every point evaluated in one call."""
     k = p.size
-    H = np.empty((k, k))
-    f0 = f(p)
+    steps = [np.zeros(k) for _ in range(k)]
     for i in range(k):
-        e_i = np.zeros(k)
-        e_i[i] = h[i]
-        H[i, i] = (f(p + e_i) - 2 * f0 + f(p - e_i)) / h[i] ** 2
+        steps[i][i] = h[i]
+    points = [p]
+    for i in range(k):
+        points += [p + steps[i], p - steps[i]]
         for j in range(i):
-            e_j = np.zeros(k)
-            e_j[j] = h[j]
-            H[i, j] = H[j, i] = (f(p + e_i + e_j) - f(p + e_i - e_j) - f(p - e_i + e_j)
-                                 + f(p - e_i - e_j)) / (4 * h[i] * h[j])
+            points += [p + steps[i] + steps[j], p + steps[i] - steps[j], p - steps[i] + steps[j],
+                       p - steps[i] - steps[j]]
+    f = iter(f_many(np.array(points)))
+    H = np.empty((k, k))
+    f0 = next(f)
+    for i in range(k):
+        fp, fm = next(f), next(f)
+        H[i, i] = (fp - 2 * f0 + fm) / h[i] ** 2
+        for j in range(i):
+            fpp, fpm, fmp, fmm = next(f), next(f), next(f), next(f)
+            H[i, j] = H[j, i] = (fpp - fpm - fmp + fmm) / (4 * h[i] * h[j])
     return H
 
 
 def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray,
            lower: np.ndarray | None = None, covariance: bool = True,
-           per_sample: Callable[[np.ndarray], np.ndarray] | None = None, noise: tuple[int, ...] = ()) -> MlFit:
+           per_sample: Callable[[np.ndarray], np.ndarray] | None = None, noise: tuple[int, ...] = (),
+           nll_many: Callable[[np.ndarray], np.ndarray] | None = None) -> MlFit:
     """Minimise ``nll`` from p0 and invert its curvature.
 
     Parameters
@@ -114,6 +124,10 @@ def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray
     noise : tuple of int
         The noise parameters (log variances): the other parameters' intervals take Satterthwaite's
         degrees of freedom from how well these are known (MlFit.dof), as in a mixed model.
+    nll_many : callable, optional
+        Parameter points in rows -> their negative log-likelihoods, the same values as ``nll``'s:
+        the many points of each finite-difference gradient and curvature go to it at once (one
+        compiled call where there would be one Python call each).
 
     Returns
     -------
@@ -124,11 +138,37 @@ def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray
     lo = np.full(p0.size, -np.inf) if lower is None else np.asarray(lower, float)
     z_lo = (lo - p0) / scale
     bounds = [(None if not math.isfinite(b) else b, None) for b in z_lo]
-    def fz(z: np.ndarray) -> float:
-        v = nll(p0 + scale * z)
-        return v if math.isfinite(v) else UNUSABLE
+    seen: dict[bytes, float] = {}  # every point's value, by its bits: a point met again is not evaluated again
 
-    res = minimize(fz, np.zeros(p0.size), method="L-BFGS-B", bounds=bounds,
+    def fz(z: np.ndarray) -> float:
+        key = z.tobytes()
+        if key not in seen:
+            v = nll(p0 + scale * z)
+            seen[key] = v if math.isfinite(v) else UNUSABLE
+        return seen[key]
+
+    def fz_many(Z: np.ndarray) -> np.ndarray:
+        keys = [z.tobytes() for z in Z]
+        new = [i for i, key in enumerate(keys) if key not in seen]
+        if new:
+            P = p0 + scale * Z[new]
+            v = nll_many(P) if nll_many is not None else np.array([nll(p) for p in P])
+            seen.update(zip((keys[i] for i in new), np.where(np.isfinite(v), v, UNUSABLE).tolist()))
+        return np.array([seen[key] for key in keys])
+
+    def gradient(z: np.ndarray) -> np.ndarray:
+        """Forward differences from the value the minimiser has just had at z, as L-BFGS-B takes
+        them itself: steps of FD_STEP, a relative step where z is so large that FD_STEP is lost to
+        rounding, turned back where it would cross a lower bound."""
+        f0 = fz(z)
+        step = np.where((z + FD_STEP) - z == 0, math.sqrt(np.finfo(float).eps) * np.where(z >= 0, 1.0, -1.0)
+                        * np.maximum(1.0, np.abs(z)), FD_STEP)
+        step = np.where(z + step < z_lo, -step, step)
+        points = np.tile(z, (z.size, 1))
+        points[np.diag_indices(z.size)] = z + step
+        return (fz_many(points) - f0) / ((z + step) - z)
+
+    res = minimize(fz, np.zeros(p0.size), method="L-BFGS-B", jac=gradient, bounds=bounds,
                    options={"maxiter": 500, "ftol": 1e-10, "gtol": 1e-3, "maxcor": 20})
     z = res.x
     if not covariance:
@@ -136,10 +176,12 @@ def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray
     h = np.full(p0.size, HESSIAN_STEP)
     for _ in range(NEWTON_STEPS):  # L-BFGS-B stops loosely on a long record: Newton steps on the curvature
         free = z > z_lo + 1e-6
-        cov_free = np.linalg.pinv(hessian(fz, z, h)[np.ix_(free, free)])
+        cov_free = np.linalg.pinv(hessian(fz_many, z, h)[np.ix_(free, free)])
         h[free] = HESSIAN_STEP * np.sqrt(np.clip(np.diag(cov_free), STEP_RANGE[0], STEP_RANGE[1]))
-        grad = np.array([(fz(z + h[i] * np.eye(p0.size)[i]) - fz(z - h[i] * np.eye(p0.size)[i])) / (2 * h[i])
-                         for i in np.flatnonzero(free)])
+        idx = np.flatnonzero(free)
+        f = fz_many(np.array([q for i in idx for q in (z + h[i] * np.eye(p0.size)[i],
+                                                      z - h[i] * np.eye(p0.size)[i])]))
+        grad = (f[0::2] - f[1::2]) / (2 * h[idx])
         move = -cov_free @ grad
         if not np.all(np.isfinite(move)) or np.max(np.abs(move)) < NEWTON_DONE:
             break
@@ -151,7 +193,7 @@ def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray
         z = trial
     else:
         free = z > z_lo + 1e-6
-        cov_free = np.linalg.pinv(hessian(fz, z, h)[np.ix_(free, free)])
+        cov_free = np.linalg.pinv(hessian(fz_many, z, h)[np.ix_(free, free)])
     if per_sample is not None:
         idx = np.flatnonzero(free)
         scores = np.column_stack([(per_sample(p0 + scale * (z + h[i] * np.eye(p0.size)[i]))
@@ -174,10 +216,10 @@ def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray
 
         def block(zz: np.ndarray) -> np.ndarray:
             """The model-based covariance of the other parameters with the noise held at zz's."""
-            def f_rest(x: np.ndarray) -> float:
-                full = zz.copy()
-                full[rest] = x
-                return fz(full)
+            def f_rest(X: np.ndarray) -> np.ndarray:
+                full = np.tile(zz, (X.shape[0], 1))
+                full[:, rest] = X
+                return fz_many(full)
 
             out = np.zeros((p0.size, p0.size))
             out[np.ix_(rest, rest)] = np.linalg.pinv(hessian(f_rest, zz[rest], h[rest]))
@@ -198,7 +240,8 @@ def ml_fit(nll: Callable[[np.ndarray], float], p0: np.ndarray, scale: np.ndarray
 
 
 def added_term(nll_with: Callable[[np.ndarray], float], fit: MlFit, start_scale: np.ndarray, scale: float,
-               lower: np.ndarray) -> tuple[np.ndarray, float]:
+               lower: np.ndarray, nll_many: Callable[[np.ndarray], np.ndarray] | None = None
+               ) -> tuple[np.ndarray, float]:
     """The likelihood-ratio test of one added parameter (last in p), zero in ``fit``:
     z = sign x sqrt(2 (nll without - nll with)), about standard normal when the data need no such term.
 
@@ -214,6 +257,8 @@ def added_term(nll_with: Callable[[np.ndarray], float], fit: MlFit, start_scale:
         About the added parameter's standard error.
     lower : ndarray
         The lower bounds ``fit`` had.
+    nll_many : callable, optional
+        ``nll_with`` at many points at once (as ml_fit's).
 
     Returns
     -------
@@ -222,6 +267,6 @@ def added_term(nll_with: Callable[[np.ndarray], float], fit: MlFit, start_scale:
     """
     se = np.sqrt(np.clip(np.diag(fit.cov), 0.0, None))
     both = ml_fit(nll_with, np.append(fit.p, 0.0), np.append(np.where(se > 0, se, start_scale), scale),
-                  np.append(lower, -np.inf), covariance=False)
+                  np.append(lower, -np.inf), covariance=False, nll_many=nll_many)
     lr = 2.0 * (fit.nll - both.nll)
     return both.p, float(math.copysign(math.sqrt(max(lr, 0.0)), both.p[-1]))

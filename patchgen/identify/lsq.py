@@ -125,7 +125,7 @@ class LsqFit:
 
 
 def fit(residual: Callable[[np.ndarray], np.ndarray], p0: np.ndarray, scale: np.ndarray,
-        bounds: tuple = (-np.inf, np.inf)) -> LsqFit:
+        bounds: tuple = (-np.inf, np.inf), covariance: bool = True) -> LsqFit:
     """Minimise sum(residual(p)^2) from p0, and the Newey-West covariance of the result.
 
     Parameters
@@ -138,6 +138,9 @@ def fit(residual: Callable[[np.ndarray], np.ndarray], p0: np.ndarray, scale: np.
         Typical size of each parameter's change (the solver's x_scale and difference steps).
     bounds : tuple
         Lower and upper bounds, as scipy.optimize.least_squares takes them.
+    covariance : bool
+        Without, the fit alone (a start for another fit): its covariance is NaN, the residuals'
+        long sums of autocovariance not taken.
 
     Returns
     -------
@@ -158,6 +161,8 @@ def fit(residual: Callable[[np.ndarray], np.ndarray], p0: np.ndarray, scale: np.
     jac = _jacobian(residual, p, scale)
     if not (np.all(np.isfinite(r)) and np.all(np.isfinite(jac))):
         raise FitError("the model cannot be evaluated around its best fit (no finite residuals)")
+    if not covariance:
+        return LsqFit(p, np.full((p.size, p.size), np.nan), r, jac)
     bread = np.linalg.pinv(jac.T @ jac)
     meat = sandwich_meat(jac, r)
     n, k = jac.shape

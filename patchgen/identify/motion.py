@@ -39,20 +39,27 @@ def actuator_force(u: np.ndarray, act: BenchActuator, dt: float) -> np.ndarray:
     dz = act.dead_zone_V
     v = np.where(u > dz, u - dz, np.where(u < -dz, u + dz, 0.0))
     F = np.empty(u.size)
-    held = v[0]  # the command over the step that ends at each sample
-    x = v[0] if act.model == "lag_zero" else act.K_U * v[0]
+    model = 0 if act.model == "gain" or act.tau <= 0 else (1 if act.model == "lag" else 2)
     decay = math.exp(-dt / act.tau) if act.tau > 0 else 0.0
-    for k in range(u.size):
-        if act.model == "gain" or act.tau <= 0:
-            F[k] = act.K_U * held
-        elif act.model == "lag":
+    _actuator_steps(v, float(act.K_U), float(act.tau), decay, model, F)
+    return np.clip(F, -act.force_limit_N, act.force_limit_N)
+
+
+@nb.njit(**_JIT)
+def _actuator_steps(v, K_U, tau, decay, model, F):
+    """actuator_force's steps into F: model 0 a gain, 1 a lag, 2 a lag with a zero at the origin."""
+    held = v[0]  # the command over the step that ends at each sample
+    x = v[0] if model == 2 else K_U * v[0]
+    for k in range(v.size):
+        if model == 0:
+            F[k] = K_U * held
+        elif model == 1:
             F[k] = x
         else:
-            F[k] = act.K_U / act.tau * (held - x)
+            F[k] = K_U / tau * (held - x)
         held = v[k]
-        target = held if act.model == "lag_zero" else act.K_U * held
+        target = held if model == 2 else K_U * held
         x = target + (x - target) * decay
-    return np.clip(F, -act.force_limit_N, act.force_limit_N)
 
 
 def slide(plant: PlantParams, s0: float, v0: float, push: np.ndarray, h: float,
@@ -60,23 +67,31 @@ def slide(plant: PlantParams, s0: float, v0: float, push: np.ndarray, h: float,
     """The cart with the pendulum fixed to it (B.1 with the slope's force in ``push``):
     (M + m) s'' = push - b_VF s' - F_c sgn(s'), RK4 at step h with push held over each step.
     Returns s and s' at every step (len(push) + 1 samples)."""
-    mass = plant.M + plant.m
     s, v = np.empty(push.size + 1), np.empty(push.size + 1)
-    s[0], v[0] = s0, v0
-    def acc(f: float, vv: float) -> float:
-        return (f - plant.b_VF * vv - coulomb_N * np.sign(vv)) / mass
+    _slide(float(plant.M + plant.m), float(plant.b_VF), float(coulomb_N), float(s0), float(v0),
+           np.ascontiguousarray(push, dtype=float), float(h), s, v)
+    return s, v
 
+
+@nb.njit(**_JIT)
+def _slide_acc(f, vv, mass, b_VF, coulomb_N):
+    return (f - b_VF * vv - coulomb_N * np.sign(vv)) / mass
+
+
+@nb.njit(**_JIT)
+def _slide(mass, b_VF, coulomb_N, s0, v0, push, h, s, v):
+    """slide's RK4 steps into s and v."""
+    s[0], v[0] = s0, v0
     for k in range(push.size):
         f = push[k]
-        k1v = acc(f, v[k])
-        k2v = acc(f, v[k] + 0.5 * h * k1v)
-        k3v = acc(f, v[k] + 0.5 * h * k2v)
-        k4v = acc(f, v[k] + h * k3v)
+        k1v = _slide_acc(f, v[k], mass, b_VF, coulomb_N)
+        k2v = _slide_acc(f, v[k] + 0.5 * h * k1v, mass, b_VF, coulomb_N)
+        k3v = _slide_acc(f, v[k] + 0.5 * h * k2v, mass, b_VF, coulomb_N)
+        k4v = _slide_acc(f, v[k] + h * k3v, mass, b_VF, coulomb_N)
         v[k + 1] = v[k] + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
         s[k + 1] = s[k] + h / 6 * (v[k] + 2 * (v[k] + 0.5 * h * k1v) + 2 * (v[k] + 0.5 * h * k2v) + v[k] + h * k3v)
         if coulomb_N > 0 and v[k] != 0 and np.sign(v[k + 1]) != np.sign(v[k]) and abs(f) <= coulomb_N:
             v[k + 1] = 0.0  # static friction holds a cart that has stopped
-    return s, v
 
 
 @nb.njit(**_JIT)

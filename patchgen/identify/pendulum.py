@@ -91,15 +91,17 @@ def fit_swing(rec: Recording, gain: float, g: float, force_bandwidth_Hz: float, 
     slope = (y[min(3, y.size - 1)] - y[0]) / (min(3, y.size - 1) * dt)
     p0 = np.array([2 * sig, w2_0, off0, (y[0] - off0) / gain, math.copysign(phi_amp * wd, slope)])
     scale = np.array([1e-3 * max(2 * sig, 1e-3), 1e-4 * w2_0, noise, noise / gain, noise / gain * wd])
-    first = lsq.fit(lambda p: free(p) - y, p0, scale)
+    first = lsq.fit(lambda p: free(p) - y, p0, scale, covariance=False)  # a start: its covariance ignores the torque
     r = float(np.var(free(first.p) - y))
     pred, terms = np.empty(t.size), np.empty(t.size)
 
+    def nll_many(P: np.ndarray) -> np.ndarray:
+        out = np.empty(P.shape[0])
+        filters.swing_nll_many(y, dt, lam, gain, np.ascontiguousarray(P, dtype=float), pred, terms, out)
+        return out
+
     def nll(p: np.ndarray) -> float:
-        beta, w2, off, phi0, om0, lq, lr = p[:7]
-        gam = p[7] if p.size > 7 else 0.0
-        return filters.swing_nll(y, dt, beta, w2, gam, lam, math.exp(lq), math.exp(lr), gain, off, phi0, om0, pred,
-                                 terms)
+        return float(nll_many(p[None, :])[0])
 
     def per_sample(p: np.ndarray) -> np.ndarray:
         nll(p)
@@ -113,15 +115,15 @@ def fit_swing(rec: Recording, gain: float, g: float, force_bandwidth_Hz: float, 
     sd_y = math.sqrt(r / y.size)
     se0 = np.array([0.1 * max(first.p[0], 1e-3), 1e-4 * first.p[1], sd_y, sd_y / gain, sd_y / gain * wd, 0.3, 0.05])
     lower = np.array([-np.inf, 0.0, -np.inf, -np.inf, -np.inf, floor - 20, floor])
-    fit = kalman.ml_fit(nll, start, se0, lower, per_sample=per_sample, noise=NOISE)
+    fit = kalman.ml_fit(nll, start, se0, lower, per_sample=per_sample, noise=NOISE, nll_many=nll_many)
     # Coulomb friction at the hinge: about beta x the swing's speed at the same decay
     gam_scale = max(fit.p[0], 1e-3) * phi_amp * wd
-    both, zc = kalman.added_term(nll, fit, se0, gam_scale, lower)
+    both, zc = kalman.added_term(nll, fit, se0, gam_scale, lower, nll_many)
     coulomb = zc > Z_REJECT  # friction opposes the motion: a negative torque is no friction
     if coulomb:
         se = np.sqrt(np.diag(fit.cov))
         fit = kalman.ml_fit(nll, both, np.append(np.where(se > 0, se, se0), gam_scale), np.append(lower, -np.inf),
-                            per_sample=per_sample, noise=NOISE)
+                            per_sample=per_sample, noise=NOISE, nll_many=nll_many)
     checks = [Check("Coulomb friction", zc, Z_REJECT, coulomb,
                     f"likelihood-ratio z = {zc:.3g} for a constant friction torque: " +
                     ("the data show a linear decay part (Coulomb friction at the hinge, not in patchgen's plant)"

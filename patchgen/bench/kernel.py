@@ -76,7 +76,7 @@ class Draws(NamedTuple):
 
 class Settings(NamedTuple):
     """The scalar settings of a batch with the actuator's, and the initial plant state (flat:
-    numba's parallel loops do not take a record nested in another)."""
+    one record, not records nested in one another)."""
 
     dt: float  # s
     steps: int

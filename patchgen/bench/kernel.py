@@ -36,13 +36,13 @@ import numba as nb
 import numpy as np
 
 from patchgen.bench.circuit import DIFFERENTIATOR
-from patchgen.bench.lanes import N_ACTUATOR, circuit, drive
+from patchgen.bench.lanes import N_ACTUATOR, N_ACTUATOR_ROWS, actuator_rates, circuit, drive
 from patchgen.bench.noise import WORDS, fill_normals
 from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "2c808f4607cc8987"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_IN = "00a073ae65d87f28"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 64  # runs per block
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 N_STATES = len(PLANT_STATES)
@@ -158,7 +158,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     ns, na = sensors.state.shape[0], wiring.kind.shape[0]
     nch = noise.a.shape[0]  # ns + na voltages, then the two forces
     pc = np.empty((N_COEF, nl))
-    act = np.empty((N_ACTUATOR, nl))  # each lane's actuator, sensor gains and noise levels
+    act = np.empty((N_ACTUATOR_ROWS, nl))  # each lane's actuator, sensor gains and noise levels
     gain = np.empty((ns, nl))
     nstd = np.empty((nch, nl))
     half = np.empty(nl)
@@ -182,6 +182,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
             za[j, l] = wiring.ic[j]
         for i in range(N_STATES):
             xp[i, l] = settings.x0[i]
+    actuator_rates(act)
     nz = np.zeros((nch, nl))
     rows = (nch + WORDS - 1) // WORDS * WORDS
     z = np.empty((rows, nl))

@@ -230,10 +230,12 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
                 for l in range(nl):
                     nz[c, l] = a * nz[c, l] + nstd[c, l] * z[c, l]
         f_cart, f_tip, s_ref = _disturbances(disturbances, t, h)
-        for st in range(4):
-            _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat)
-            circuit(xt, zt, s_ref, nz, sensors.state, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
-            drive(xt, xat, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, forces, st)
+        for st in range(4):  # stage 0 reads the step's start itself, the others their own states
+            if st > 0:
+                _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat)
+            X, Z, XA = (xp, za, xa) if st == 0 else (xt, zt, xat)
+            circuit(X, Z, s_ref, nz, sensors.state, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
+            drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, forces, st)
             if st == 0:  # record and summarise time t; a run ends at the scenario's end or at a trip
                 for l in range(n_hist):
                     if alive[l] and (n % stride == 0 or n == n_steps or tripped[l]):
@@ -285,13 +287,8 @@ def _disturbances(dist, t, h):
 
 @nb.njit(**_JIT)
 def _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat):
-    """The states at RK4 stage st: the step's start, then start + c * the last stage's slopes."""
+    """The states at RK4 stage st > 0: the step's start + c * the last stage's slopes."""
     nl = xa.shape[0]
-    if st == 0:
-        xt[:] = xp
-        zt[:] = za
-        xat[:] = xa
-        return
     c = h if st == 3 else 0.5 * h
     for i in range(4):
         for l in range(nl):

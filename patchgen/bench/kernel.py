@@ -257,7 +257,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
             xa[l] += h / 6.0 * (kx[0, l] + 2.0 * kx[1, l] + 2.0 * kx[2, l] + kx[3, l])
         trips = 0
         for l in range(nl):
-            trips += alive[l] and not tripped[l] and abs(xp[S, l]) >= half[l]
+            trips += alive[l] & (not tripped[l]) & (abs(xp[S, l]) >= half[l])
         if limit_on and trips:
             for l in range(nl):
                 if alive[l] and not tripped[l] and abs(xp[S, l]) >= half[l]:
@@ -305,8 +305,9 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
                sum_th2, mth, ms, muc, mf, out):
     """Figures at time t of the lanes still running; the results of those whose run ends here.
     Returns how many ended. The running figures are updated in every lane (an ended lane's are
-    no longer read), so that loop vectorises; events (a fall, an overload, the end) are rare and
-    are looked at lane by lane only when there is one."""
+    no longer read), so that loop vectorises (the tests for an event with & and |, not the
+    branches of and / or); events (a fall, an overload, the end) are rare and are looked at lane
+    by lane only when there is one."""
     sat, h, fall = settings.saturation, settings.dt, settings.fall_angle
     res = out.results
     nl = alive.shape[0]
@@ -318,10 +319,10 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
         ms[l] = s if s > ms[l] else ms[l]
         muc[l] = u if u > muc[l] else muc[l]
         mf[l] = f if f > mf[l] else mf[l]
-        events += alive[l] and (tripped[l] or (th > fall and not fallen[l]))
+        events += alive[l] & (tripped[l] | ((th > fall) & (not fallen[l])))
     for j in range(raw.shape[0]):
         for l in range(nl):
-            events += alive[l] and (abs(raw[j, l]) > sat or pinned[j, l])
+            events += alive[l] & ((abs(raw[j, l]) > sat) | pinned[j, l])
     if events == 0 and not end:
         return 0
     ended = 0

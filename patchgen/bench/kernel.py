@@ -42,7 +42,7 @@ from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "00a073ae65d87f28"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_IN = "43244eff0ed14090"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 64  # runs per block
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 N_STATES = len(PLANT_STATES)
@@ -189,7 +189,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     words = np.empty((WORDS, nl), dtype=np.uint64)
     noisy = np.any(nstd > 0.0)
     if noisy:  # start the noise in its stationary distribution
-        fill_normals(np.int64(0), k0, k1, z, words)  # typed, not a literal: one compilation of it
+        fill_normals(np.int64(0), k0, k1, z, words, nch)  # typed, not a literal: one compilation of it
         for c in range(nch):
             for l in range(nl):
                 nz[c, l] = z[c, l] * nstd[c, l] / math.sqrt(1.0 - noise.a[c] * noise.a[c])
@@ -224,7 +224,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     for n in range(n_steps + 1):
         t = n * h
         if noisy and n > 0:  # new noise for this step
-            fill_normals(n, k0, k1, z, words)
+            fill_normals(n, k0, k1, z, words, nch)
             for c in range(nch):
                 a = noise.a[c]
                 for l in range(nl):

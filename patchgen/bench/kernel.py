@@ -167,6 +167,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     drift = np.empty((na, nl))  # each integrating amplifier drifts one way, drawn per run
     xp = np.empty((N_STATES, nl))
     za = np.empty((na, nl))
+    over = np.empty((2, na, nl))  # each lane's overloads (first time, time), copied out at its end
     for l in range(nl):
         plant_coefficients(plants[lo + l], pc[:, l])
         half[l] = plants[lo + l, P_HALF_TRACK]
@@ -180,6 +181,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
         for j in range(na):
             drift[j, l] = wiring.drift[j] * signs[lo + l, j]
             za[j, l] = wiring.ic[j]
+            over[0, j, l], over[1, j, l] = out.overload_first[lo + l, j], out.overload_time[lo + l, j]
         for i in range(N_STATES):
             xp[i, l] = settings.x0[i]
     actuator_rates(act)
@@ -241,7 +243,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
                     if alive[l] and (n % stride == 0 or n == n_steps or tripped[l]):
                         _record(out, lo + l, l, t, xp, s_ref, sig, out_index, forces, ns)
                 n_alive -= _summaries(n, t, n == n_steps, lo, alive, tripped, fallen, xp, raw, pinned,
-                                      sig, out_index, forces, settings, sum_th2, mth, ms, muc, mf, out)
+                                      sig, out_index, forces, settings, sum_th2, mth, ms, muc, mf, over, out)
         if n_alive == 0:
             break
         for i in range(N_STATES):
@@ -302,12 +304,12 @@ def _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat):
 
 @nb.njit(**_JIT)
 def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_index, forces, settings,
-               sum_th2, mth, ms, muc, mf, out):
+               sum_th2, mth, ms, muc, mf, over, out):
     """Figures at time t of the lanes still running; the results of those whose run ends here.
     Returns how many ended. The running figures are updated in every lane (an ended lane's are
     no longer read), so that loop vectorises (the tests for an event with & and |, not the
-    branches of and / or); events (a fall, an overload, the end) are rare and are looked at lane
-    by lane only when there is one."""
+    branches of and / or); so are a step's overloads, in over (first time, time overloaded),
+    when there is one; the rarer events (a fall, a trip, the end) are looked at lane by lane."""
     sat, h, fall = settings.saturation, settings.dt, settings.fall_angle
     res = out.results
     nl = alive.shape[0]
@@ -320,9 +322,16 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
         muc[l] = u if u > muc[l] else muc[l]
         mf[l] = f if f > mf[l] else mf[l]
         events += alive[l] & (tripped[l] | ((th > fall) & (not fallen[l])))
+    overloads = 0
     for j in range(raw.shape[0]):
         for l in range(nl):
-            events += alive[l] & ((abs(raw[j, l]) > sat) | pinned[j, l])
+            overloads += alive[l] & ((abs(raw[j, l]) > sat) | pinned[j, l])
+    if overloads:  # the first time, and the time up to the run's last sample
+        for j in range(raw.shape[0]):
+            for l in range(nl):
+                o = alive[l] & ((abs(raw[j, l]) > sat) | pinned[j, l])
+                over[0, j, l] = t if o & math.isnan(over[0, j, l]) else over[0, j, l]
+                over[1, j, l] = over[1, j, l] + h if o & (not (end | tripped[l])) else over[1, j, l]
     if events == 0 and not end:
         return 0
     ended = 0
@@ -334,13 +343,9 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
         if not fallen[l] and abs(xp[THETA, l]) > fall:
             fallen[l] = True
             res[r, R_FALL] = t
-        for j in range(raw.shape[0]):
-            if abs(raw[j, l]) > sat or pinned[j, l]:
-                if math.isnan(out.overload_first[r, j]):
-                    out.overload_first[r, j] = t
-                if not last:
-                    out.overload_time[r, j] += h
         if last:
+            for j in range(raw.shape[0]):
+                out.overload_first[r, j], out.overload_time[r, j] = over[0, j, l], over[1, j, l]
             res[r, R_MAX_TH], res[r, R_MAX_S], res[r, R_RMS_TH] = mth[l], ms[l], math.sqrt(sum_th2[l] / (n + 1))
             res[r, R_MAX_UC], res[r, R_MAX_F] = muc[l], mf[l]
             for i in range(N_STATES):

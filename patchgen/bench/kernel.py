@@ -36,13 +36,13 @@ import numba as nb
 import numpy as np
 
 from patchgen.bench.circuit import DIFFERENTIATOR
-from patchgen.bench.lanes import N_ACTUATOR, circuit, drive
+from patchgen.bench.lanes import N_ACTUATOR, N_ACTUATOR_ROWS, actuator_rates, circuit, drive
 from patchgen.bench.noise import WORDS, fill_normals
 from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "2c808f4607cc8987"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_IN = "43244eff0ed14090"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 64  # runs per block
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 N_STATES = len(PLANT_STATES)
@@ -158,7 +158,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     ns, na = sensors.state.shape[0], wiring.kind.shape[0]
     nch = noise.a.shape[0]  # ns + na voltages, then the two forces
     pc = np.empty((N_COEF, nl))
-    act = np.empty((N_ACTUATOR, nl))  # each lane's actuator, sensor gains and noise levels
+    act = np.empty((N_ACTUATOR_ROWS, nl))  # each lane's actuator, sensor gains and noise levels
     gain = np.empty((ns, nl))
     nstd = np.empty((nch, nl))
     half = np.empty(nl)
@@ -167,6 +167,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     drift = np.empty((na, nl))  # each integrating amplifier drifts one way, drawn per run
     xp = np.empty((N_STATES, nl))
     za = np.empty((na, nl))
+    over = np.empty((2, na, nl))  # each lane's overloads (first time, time), copied out at its end
     for l in range(nl):
         plant_coefficients(plants[lo + l], pc[:, l])
         half[l] = plants[lo + l, P_HALF_TRACK]
@@ -180,15 +181,17 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
         for j in range(na):
             drift[j, l] = wiring.drift[j] * signs[lo + l, j]
             za[j, l] = wiring.ic[j]
+            over[0, j, l], over[1, j, l] = out.overload_first[lo + l, j], out.overload_time[lo + l, j]
         for i in range(N_STATES):
             xp[i, l] = settings.x0[i]
+    actuator_rates(act)
     nz = np.zeros((nch, nl))
     rows = (nch + WORDS - 1) // WORDS * WORDS
     z = np.empty((rows, nl))
     words = np.empty((WORDS, nl), dtype=np.uint64)
     noisy = np.any(nstd > 0.0)
     if noisy:  # start the noise in its stationary distribution
-        fill_normals(np.int64(0), k0, k1, z, words)  # typed, not a literal: one compilation of it
+        fill_normals(np.int64(0), k0, k1, z, words, nch)  # typed, not a literal: one compilation of it
         for c in range(nch):
             for l in range(nl):
                 nz[c, l] = z[c, l] * nstd[c, l] / math.sqrt(1.0 - noise.a[c] * noise.a[c])
@@ -223,22 +226,24 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     for n in range(n_steps + 1):
         t = n * h
         if noisy and n > 0:  # new noise for this step
-            fill_normals(n, k0, k1, z, words)
+            fill_normals(n, k0, k1, z, words, nch)
             for c in range(nch):
                 a = noise.a[c]
                 for l in range(nl):
                     nz[c, l] = a * nz[c, l] + nstd[c, l] * z[c, l]
         f_cart, f_tip, s_ref = _disturbances(disturbances, t, h)
-        for st in range(4):
-            _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat)
-            circuit(xt, zt, s_ref, nz, sensors.state, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
-            drive(xt, xat, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, forces, st)
+        for st in range(4):  # stage 0 reads the step's start itself, the others their own states
+            if st > 0:
+                _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat)
+            X, Z, XA = (xp, za, xa) if st == 0 else (xt, zt, xat)
+            circuit(X, Z, s_ref, nz, sensors.state, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
+            drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, forces, st)
             if st == 0:  # record and summarise time t; a run ends at the scenario's end or at a trip
                 for l in range(n_hist):
                     if alive[l] and (n % stride == 0 or n == n_steps or tripped[l]):
                         _record(out, lo + l, l, t, xp, s_ref, sig, out_index, forces, ns)
                 n_alive -= _summaries(n, t, n == n_steps, lo, alive, tripped, fallen, xp, raw, pinned,
-                                      sig, out_index, forces, settings, sum_th2, mth, ms, muc, mf, out)
+                                      sig, out_index, forces, settings, sum_th2, mth, ms, muc, mf, over, out)
         if n_alive == 0:
             break
         for i in range(N_STATES):
@@ -254,7 +259,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
             xa[l] += h / 6.0 * (kx[0, l] + 2.0 * kx[1, l] + 2.0 * kx[2, l] + kx[3, l])
         trips = 0
         for l in range(nl):
-            trips += alive[l] and not tripped[l] and abs(xp[S, l]) >= half[l]
+            trips += alive[l] & (not tripped[l]) & (abs(xp[S, l]) >= half[l])
         if limit_on and trips:
             for l in range(nl):
                 if alive[l] and not tripped[l] and abs(xp[S, l]) >= half[l]:
@@ -284,13 +289,8 @@ def _disturbances(dist, t, h):
 
 @nb.njit(**_JIT)
 def _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat):
-    """The states at RK4 stage st: the step's start, then start + c * the last stage's slopes."""
+    """The states at RK4 stage st > 0: the step's start + c * the last stage's slopes."""
     nl = xa.shape[0]
-    if st == 0:
-        xt[:] = xp
-        zt[:] = za
-        xat[:] = xa
-        return
     c = h if st == 3 else 0.5 * h
     for i in range(4):
         for l in range(nl):
@@ -304,11 +304,12 @@ def _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat):
 
 @nb.njit(**_JIT)
 def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_index, forces, settings,
-               sum_th2, mth, ms, muc, mf, out):
+               sum_th2, mth, ms, muc, mf, over, out):
     """Figures at time t of the lanes still running; the results of those whose run ends here.
     Returns how many ended. The running figures are updated in every lane (an ended lane's are
-    no longer read), so that loop vectorises; events (a fall, an overload, the end) are rare and
-    are looked at lane by lane only when there is one."""
+    no longer read), so that loop vectorises (the tests for an event with & and |, not the
+    branches of and / or); so are a step's overloads, in over (first time, time overloaded),
+    when there is one; the rarer events (a fall, a trip, the end) are looked at lane by lane."""
     sat, h, fall = settings.saturation, settings.dt, settings.fall_angle
     res = out.results
     nl = alive.shape[0]
@@ -320,10 +321,17 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
         ms[l] = s if s > ms[l] else ms[l]
         muc[l] = u if u > muc[l] else muc[l]
         mf[l] = f if f > mf[l] else mf[l]
-        events += alive[l] and (tripped[l] or (th > fall and not fallen[l]))
+        events += alive[l] & (tripped[l] | ((th > fall) & (not fallen[l])))
+    overloads = 0
     for j in range(raw.shape[0]):
         for l in range(nl):
-            events += alive[l] and (abs(raw[j, l]) > sat or pinned[j, l])
+            overloads += alive[l] & ((abs(raw[j, l]) > sat) | pinned[j, l])
+    if overloads:  # the first time, and the time up to the run's last sample
+        for j in range(raw.shape[0]):
+            for l in range(nl):
+                o = alive[l] & ((abs(raw[j, l]) > sat) | pinned[j, l])
+                over[0, j, l] = t if o & math.isnan(over[0, j, l]) else over[0, j, l]
+                over[1, j, l] = over[1, j, l] + h if o & (not (end | tripped[l])) else over[1, j, l]
     if events == 0 and not end:
         return 0
     ended = 0
@@ -335,13 +343,9 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
         if not fallen[l] and abs(xp[THETA, l]) > fall:
             fallen[l] = True
             res[r, R_FALL] = t
-        for j in range(raw.shape[0]):
-            if abs(raw[j, l]) > sat or pinned[j, l]:
-                if math.isnan(out.overload_first[r, j]):
-                    out.overload_first[r, j] = t
-                if not last:
-                    out.overload_time[r, j] += h
         if last:
+            for j in range(raw.shape[0]):
+                out.overload_first[r, j], out.overload_time[r, j] = over[0, j, l], over[1, j, l]
             res[r, R_MAX_TH], res[r, R_MAX_S], res[r, R_RMS_TH] = mth[l], ms[l], math.sqrt(sum_th2[l] / (n + 1))
             res[r, R_MAX_UC], res[r, R_MAX_F] = muc[l], mf[l]
             for i in range(N_STATES):

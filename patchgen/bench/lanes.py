@@ -19,6 +19,8 @@ ACT_GAIN, ACT_LAG, ACT_LAG_ZERO = 0, 1, 2
 ACTUATOR_VECTOR = ("K_U", "tau", "dead_zone", "force_limit")  # a run's actuator: N/V, s, V, N
 A_K_U, A_TAU, A_DEAD_ZONE, A_FORCE_LIMIT = range(len(ACTUATOR_VECTOR))
 N_ACTUATOR = len(ACTUATOR_VECTOR)
+A_INV_TAU, A_KU_TAU = N_ACTUATOR, N_ACTUATOR + 1  # rows actuator_rates adds: 1 / tau, K_U / tau
+N_ACTUATOR_ROWS = N_ACTUATOR + 2
 S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
 _JIT = {"cache": True, "error_model": "numpy"}  # as patchgen.bench.kernel's
 
@@ -97,19 +99,28 @@ def circuit(X, Z, s_ref, nz, sensor_state, sensor_gain, wiring, drift, sat, clip
 
 
 @nb.njit(**_JIT)
+def actuator_rates(ap):
+    """Fill rows A_INV_TAU and A_KU_TAU of ap (N_ACTUATOR_ROWS, lane) from its K_U and tau: the
+    same quotients drive used to take at every stage, taken once per block."""
+    for l in range(ap.shape[1]):
+        ap[A_INV_TAU, l] = 1.0 / ap[A_TAU, l]
+        ap[A_KU_TAU, l] = ap[A_K_U, l] / ap[A_TAU, l]
+
+
+@nb.njit(**_JIT)
 def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx, forces, st):
     """Actuator (dead zone, model, force limit; off once tripped) and plant slopes per lane,
-    into kp[st], kx[st], forces[st]. act: the actuator's model ACT_*; ap (ACTUATOR_VECTOR, lane):
-    each lane's K_U, tau, dead zone, force limit; X (plant state), XA (actuator state) and pc
-    (plant_coefficients) are per lane. f_cart and f_tip are the scenario's pushes (N); the last
-    two rows of nz, the bench's random forces on the cart and at the tip (N), per lane."""
+    into kp[st], kx[st], forces[st]. act: the actuator's model ACT_*; ap (N_ACTUATOR_ROWS, lane):
+    each lane's K_U, tau, dead zone, force limit, then 1 / tau and K_U / tau (actuator_rates);
+    X (plant state), XA (actuator state) and pc (plant_coefficients) are per lane. f_cart and
+    f_tip are the scenario's pushes (N); the last two rows of nz, the bench's random forces on
+    the cart and at the tip (N), per lane."""
     fc, ft = nz.shape[0] - 2, nz.shape[0] - 1
     # Two lane loops, not one: the actuator's branches and the plant's trigonometry in one
     # body keep LLVM from vectorising either; split, both run on whole SIMD registers.
     for l in range(XA.shape[0]):
-        K_U, tau, dz, flim = ap[A_K_U, l], ap[A_TAU, l], ap[A_DEAD_ZONE, l], ap[A_FORCE_LIMIT, l]
-        inv_tau = 1.0 / tau
-        ku_tau = K_U / tau
+        K_U, dz, flim = ap[A_K_U, l], ap[A_DEAD_ZONE, l], ap[A_FORCE_LIMIT, l]
+        inv_tau, ku_tau = ap[A_INV_TAU, l], ap[A_KU_TAU, l]
         u = sig[out_index, l]
         v = u - dz if u > dz else (u + dz if u < -dz else 0.0)
         xa = XA[l]

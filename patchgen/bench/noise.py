@@ -98,16 +98,18 @@ def _zig_slow(word, n, ch, k0, k1):
 
 
 @nb.njit(**_JIT)
-def fill_normals(n, k0, k1, z, words):
-    """Standard normals of step n for every channel (row) and lane (column) of z, whose rows are
-    a whole number of groups of WORDS. k0, k1: the lanes' keys (uint64); words: scratch (WORDS,
-    lanes) uint64. Loops kept apart (bits; inner rectangles; the rare rest) so that each vectorises."""
+def fill_normals(n, k0, k1, z, words, channels):
+    """Standard normals of step n for the first ``channels`` channels (rows) and every lane
+    (column) of z, whose rows are a whole number of groups of WORDS (the rows past ``channels``
+    are left as they are: nothing reads them). k0, k1: the lanes' keys (uint64); words: scratch
+    (WORDS, lanes) uint64. Loops kept apart (bits; inner rectangles; the rare rest) so that each
+    vectorises."""
     c0 = np.uint64(n)
     for g in range(z.shape[0] // WORDS):
         c1 = np.uint64(g)
         for l in range(k0.shape[0]):
             words[0, l], words[1, l], words[2, l], words[3, l] = philox(c0, c1, _ZERO, _ZERO, k0[l], k1[l])
-        for w in range(WORDS):
+        for w in range(min(WORDS, channels - g * WORDS)):
             ch = g * WORDS + w
             refused = 0
             for l in range(k0.shape[0]):
@@ -129,6 +131,6 @@ def run_normals(key0, key1, n_steps, nch):
     words = np.empty((WORDS, 1), dtype=np.uint64)
     out = np.empty((n_steps + 1, nch))
     for n in range(n_steps + 1):
-        fill_normals(n, k0, k1, z, words)
+        fill_normals(n, k0, k1, z, words, nch)
         out[n] = z[:nch, 0]
     return out

@@ -44,10 +44,17 @@ def _write(notes: list[str], names: list[str], rows) -> str:
     return "\n".join(notes + [", ".join(names)] + [", ".join(f"{v:.10g}" for v in r) for r in rows]) + "\n"
 
 
+@functools.cache
+def _table(text: str) -> tuple[list[str], list[str], np.ndarray]:
+    """_rows as an array, read once per recording (many cases start from the same one)."""
+    notes, names, rows = _rows(text)
+    return notes, names, np.array(rows)
+
+
 def _with_column(text: str, column: str, f) -> str:
     """The recording with ``column`` replaced by f(t, column)."""
-    notes, names, rows = _rows(text)
-    a = np.array(rows)
+    notes, names, a = _table(text)
+    a = a.copy()
     i = names.index(column)
     a[:, i] = f(a[:, names.index("t_s")] if "t_s" in names else None, a[:, i])
     return _write(notes, names, a)

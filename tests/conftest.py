@@ -16,10 +16,15 @@ def root() -> Path:
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Modules marked heavy first (in collection order), then the rest as collected: the workers
-    take whole modules in this order, and a long module started last would keep one worker busy
-    while the other idles."""
-    items.sort(key=lambda item: item.get_closest_marker("heavy") is None)
+    """Modules marked ``heavy(seconds)`` first, the longest first, then the rest as collected: the
+    workers take whole modules in this order, so the long ones start early, the short ones fill in
+    at the end, and neither worker idles while the other finishes a long module. The seconds are
+    a rough guide (a warm run on two cores); only their order matters."""
+    def weight(item: pytest.Item) -> float:
+        mark = item.get_closest_marker("heavy")
+        return -mark.args[0] if mark is not None else 0.0
+
+    items.sort(key=weight)
 
 
 def design_path(name: str) -> Path:

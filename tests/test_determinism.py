@@ -8,6 +8,8 @@ import pytest
 
 from tests.conftest import ROOT
 
+pytestmark = pytest.mark.heavy(6)  # seconds, roughly: see tests/conftest.py
+
 
 def run(*args, hash_seed):
     """``patchgen *args`` in a fresh interpreter with string hashing seeded by ``hash_seed``."""

@@ -15,6 +15,8 @@ from patchgen.profiles.bench import load_bench
 from tests.cli_run import run_patchgen
 from tests.conftest import ROOT, design_path
 
+pytestmark = pytest.mark.heavy(7)  # seconds, roughly: see tests/conftest.py
+
 run = run_patchgen
 
 

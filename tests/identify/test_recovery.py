@@ -14,7 +14,7 @@ from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
 from tests.identify.benches import TRUE_BENCH, TRUE_PLANT, true_bench
 
-pytestmark = pytest.mark.heavy  # see tests/conftest.py
+pytestmark = pytest.mark.heavy(30)  # seconds, roughly: see tests/conftest.py
 
 SEEDS = range(60)  # the first sixty seeds, no others: 90 % of them is 54
 TRUE = dict(TRUE_BENCH, l=TRUE_PLANT.l, b_VF=TRUE_PLANT.b_VF, c=TRUE_PLANT.c)

@@ -25,6 +25,8 @@ from .badinput_inputs import profile_cases, scenario_cases
 from .badinput_options import file_cases, option_cases
 from .badinput_recordings import recording_cases
 
+pytestmark = pytest.mark.heavy(12)  # seconds, roughly: see tests/conftest.py
+
 CASES = (spec_cases() + scenario_cases() + profile_cases() + file_cases() + option_cases() + recording_cases()
          + identify_cases() + check_cases())
 

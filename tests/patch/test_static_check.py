@@ -18,6 +18,8 @@ from patchgen.patch.static_check import CSV_COLUMNS, static_check, static_check_
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
 
+pytestmark = pytest.mark.heavy(5)  # seconds, roughly: see tests/conftest.py
+
 CASES = [("bench-recommended", "gp6"), ("thesis-ch5", "gp6"), ("bench-recommended", "the-analog-thing"),
          ("thesis-ch5", "the-analog-thing")]
 

@@ -10,7 +10,7 @@ from tests.conftest import ROOT
 
 from .test_sheet import MM, _pdf_pages, allowed_pages
 
-pytestmark = pytest.mark.heavy  # see tests/conftest.py
+pytestmark = pytest.mark.heavy(10)  # seconds, roughly: see tests/conftest.py
 
 
 @pytest.fixture(scope="module")

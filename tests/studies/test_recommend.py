@@ -26,7 +26,7 @@ from patchgen.studies.recommend import Candidate, Recommendation, recommend
 from tests.conftest import ROOT, design_path
 from tests.patch.test_patch_roundtrip import check_roundtrip
 
-pytestmark = pytest.mark.heavy  # see tests/conftest.py
+pytestmark = pytest.mark.heavy(25)  # seconds, roughly: see tests/conftest.py
 
 HOLD = ROOT / "sims" / "hold-120s.toml"
 RUNS = 200  # 200 noise seeds, as recommend's default

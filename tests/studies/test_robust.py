@@ -21,7 +21,7 @@ from patchgen.profiles.uncertainty import BenchUncertainty
 from patchgen.studies.bench_corners import MAX_CORNER_PARAMETERS, corner_values, study
 from tests.conftest import design_path
 
-pytestmark = pytest.mark.heavy  # see tests/conftest.py
+pytestmark = pytest.mark.heavy(35)  # seconds, roughly: see tests/conftest.py
 
 GP6 = load_machine("gp6")
 UNCERTAIN = load_bench("uw-1991-uncertain")

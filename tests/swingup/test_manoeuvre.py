@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 
 from patchgen.cli.design import design_from_path
 from patchgen.design.model import plant_params
@@ -11,6 +12,8 @@ from patchgen.profiles.bench import load_bench
 from patchgen.swingup.manoeuvre import manoeuvre
 from tests.cli_run import run_patchgen
 from tests.conftest import design_path
+
+pytestmark = pytest.mark.heavy(6)  # seconds, roughly: see tests/conftest.py
 
 
 def test_bench_recommended_from_hanging_to_held():

@@ -14,6 +14,8 @@ from patchgen.swingup.run import swing_up
 from patchgen.swingup.schedule import optimise_schedule, replay, schedule_from_result
 from patchgen.swingup.strategies import BRAKE, COAST, PUSH, Supervisor, hanging_state, pendulum_energy, upright_energy
 
+pytestmark = pytest.mark.heavy(8)  # seconds, roughly: see tests/conftest.py
+
 # Table B.1 of the thesis.
 TABLE_B1 = PlantParams(M=3.552, m=0.324, l=0.429, g=9.807, b_VF=2.5775, c=0.001, d=1.090)
 # Chapter 3 assumes 15 N of control (section 3.3); the pump-up must reach the zone within 7 s.

@@ -14,7 +14,7 @@ study says which.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -120,7 +120,7 @@ def _worst_swing(res: SimResult, saturation_V: float) -> float:
 def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, scenario: Scenario,
           *, seed: int | None = None, corner_runs: int, drawn: SimResult | None = None, ends: bool = False,
           ideal: bool = False, stop: Callable[[CornerOutcome], bool] | None = None,
-          progress: Callable[[int, int], None] | None = None) -> BenchStudy:
+          known: Sequence[CornerOutcome] = (), progress: Callable[[int, int], None] | None = None) -> BenchStudy:
     """The patch at every corner of the bench's ranges (and each end of each range, if asked).
 
     Parameters
@@ -146,6 +146,9 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
     stop : callable, optional
         ``stop(corner)`` after each corner: True ends the study there (it then has fewer corners
         than the box: a search's candidate already beaten).
+    known : sequence of CornerOutcome, optional
+        Corners already run with these very inputs (the same patch, plant, bench, machine,
+        scenario, seed, runs and mode: the robust search's): taken as they are, not run again.
     progress : callable, optional
         ``progress(done, total)`` after each corner or end.
 
@@ -161,6 +164,12 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
 
     def run(values):
         nonlocal done
+        ran = next((k for k in known if k.values == values), None)
+        if ran is not None:
+            done += 1
+            if progress is not None:
+                progress(done, total)
+            return ran
         res = simulate(net, plant, bench_at(bench, values), machine, scenario, seed=seed, runs=corner_runs,
                        keep_history=False, ideal=ideal)
         done += 1

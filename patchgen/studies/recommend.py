@@ -85,6 +85,8 @@ class Candidate:
     outcomes: tuple[ScenarioOutcome, ...] = ()
     bench_study: BenchStudy | None = field(default=None, compare=False)  # corners and ends of the bench's ranges
     robust_note: str = ""  # how a corner-robust candidate was chosen
+    searched: tuple[BenchStudy, ...] = field(default=(), compare=False, repr=False)  # the robust search's
+    # corner studies of this very patch (robust.SEARCH_RUNS seeds each), every scenario
 
     @property
     def simulated(self) -> bool:
@@ -280,7 +282,9 @@ def extra_candidates(spec: DesignSpec, machine: MachineProfile, bench: BenchProf
         return []
     c = allocate(f"{robust.LABEL}, {spec.estimator.kind.replace('_', ' ')}", spec.estimator.kind, choice.spec,
                  machine, bench)
-    return [replace(c, robust_note=choice.detail())]
+    same = (c.netlist is not None and c.netlist == choice.netlist
+            and plant_params(c.design.spec) == plant_params(choice.spec))
+    return [replace(c, robust_note=choice.detail(), searched=choice.studies if same else ())]
 
 
 def _detail(d: Design) -> str:
@@ -365,7 +369,9 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
     if bench.uncertainty.ranges and c.bench_loop == "stable":
         held = {o.scenario: (o.fraction, o.interval[1]) for o in outcomes}  # ties: the longest scenario
         weak = min(scenarios, key=lambda sc: (*held[sc.name], -sc.duration_s))
-        st = study(c.netlist, plant, bench, machine, weak, seed=seed, corner_runs=CORNER_RUNS, ends=True)
+        searched = [s.corners for s in c.searched if s.scenario == weak.name and CORNER_RUNS == robust.SEARCH_RUNS]
+        st = study(c.netlist, plant, bench, machine, weak, seed=seed, corner_runs=CORNER_RUNS, ends=True,
+                   known=searched[0] if searched else ())
     return replace(c, outcomes=outcomes, bench_study=st)
 
 

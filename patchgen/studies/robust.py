@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 from patchgen.design.lqg import design_on
 from patchgen.design.model import plant_params
@@ -29,6 +29,7 @@ from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
 from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.build import build_patch
+from patchgen.patch.netlist import Netlist
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.studies.bench_corners import BenchStudy, cart_excursion, corner_values, study
@@ -62,6 +63,8 @@ class RobustChoice:
     worst_corner: dict[str, float]
     tried: int
     scenario: str  # where its worst corner is
+    netlist: Netlist | None = field(default=None, compare=False, repr=False)  # its patch
+    studies: tuple[BenchStudy, ...] = field(default=(), compare=False, repr=False)  # its corners, every scenario
 
     def detail(self) -> str:
         """The choice in a few words, for the table and the sheet."""
@@ -154,12 +157,13 @@ def search(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scena
         except InputError:
             continue
         tried += 1
-        worst, room = None, 0.0
+        worst, room, studies = None, 0.0, []
         for sc in order:
             held_so_far = SEARCH_RUNS if worst is None else worst[1].outcome.held
             st = study(net, plant_params(d.spec), bench, machine, sc, seed=seed, corner_runs=SEARCH_RUNS,
                        stop=lambda c, h=held_so_far, r=room, b=best_key: beaten(_key(min(h, c.outcome.held),
                                                                          max(r, cart_excursion(c))), b))
+            studies.append(st)
             w = st.worst_corner
             if worst is None or w.outcome.held < worst[1].outcome.held:
                 worst = (sc.name, w)
@@ -174,8 +178,7 @@ def search(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scena
         if best_key is None or key > best_key:
             best_key = key
             best = RobustChoice(d.spec, factors, integral, worst[1].outcome.held, worst[1].outcome.runs,
-                                worst[1].values, 0, worst[0])
+                                worst[1].values, 0, worst[0], net, tuple(studies))
     if progress is not None:
         progress(len(grid), len(grid))
-    return None if best is None else RobustChoice(best.spec, best.factors, best.integral_s, best.held, best.runs,
-                                                  best.worst_corner, tried, best.scenario)
+    return None if best is None else replace(best, tried=tried)

@@ -1,5 +1,6 @@
 """The robust search drops a grid point as soon as its corners so far rank no better than the best
-point's, and still chooses what running every point at every corner would choose.
+point's, and still chooses what running every point at every corner would choose; the corners it
+ran on the chosen patch are taken up by recommend's corner study of that patch, not run again.
 
 The bench's runs are replaced by a table (runs held and cart excursion per point, scenario and
 corner, drawn from a seed), so the real search and the real corner study are checked against a
@@ -74,3 +75,42 @@ def test_the_pruned_search_chooses_what_the_full_table_ranks_first(seed):
     assert (choice.factors, choice.integral_s, choice.held) == (factors, integral, keys[best][0])
     assert choice.tried == len(grid)
     assert len(ran) < len(grid) * len(SCENARIOS) * len(corners)  # points were dropped early
+
+
+def test_a_study_takes_known_corners_as_they_are_and_runs_the_rest():
+    """Corners already run (the robust search's, on the same patch) are not run again, and the
+    study is the one a fresh run gives."""
+    from patchgen.design.lqg import design_on
+    from patchgen.design.model import plant_params
+    from patchgen.patch.build import build_patch
+
+    d = design_on(SPEC, GP6, UNCERTAIN)
+    net, plant = build_patch(d, GP6), plant_params(d.spec)
+    push = load_scenario("finger-push").model_copy(update={"duration_s": 2.0})
+    fresh = bench_corners.study(net, plant, UNCERTAIN, GP6, push, corner_runs=8, ends=True)
+    ran = []
+    with pytest.MonkeyPatch.context() as mp:
+        real = bench_corners.simulate
+        mp.setattr(bench_corners, "simulate", lambda *a, **k: ran.append(a[2]) or real(*a, **k))
+        again = bench_corners.study(net, plant, UNCERTAIN, GP6, push, corner_runs=8, ends=True,
+                                    known=fresh.corners[:5])
+    assert again.as_dict() == fresh.as_dict()
+    assert len(ran) == len(fresh.corners) - 5 + len(fresh.ends)
+
+
+def test_the_robust_candidate_brings_its_corners_only_for_the_patch_they_were_run_on(monkeypatch):
+    from patchgen.design.lqg import design_on
+    from patchgen.patch.build import build_patch
+    from patchgen.studies import recommend
+
+    d = design_on(SPEC.model_copy(update={"actuator": SPEC.actuator.model_copy(update={
+        "model": UNCERTAIN.actuator.model, "K_U": UNCERTAIN.actuator.K_U, "tau": UNCERTAIN.actuator.tau,
+        "dead_zone_V": UNCERTAIN.actuator.dead_zone_V})}), GP6, UNCERTAIN)
+    net = build_patch(d, GP6, 1)
+    marker = (bench_corners.BenchStudy("finger-push", {}, "uniform", None, (), ()),)
+    other = net.model_copy(update={"notes": [*net.notes, "another patch"]})
+    for patch_of_search, brought in ((net, marker), (other, ())):
+        choice = robust.RobustChoice(d.spec, {"u": 1.0}, False, 64, 64, {}, 1, "finger-push", patch_of_search, marker)
+        monkeypatch.setattr(robust, "search", lambda *a, c=choice, **k: c)
+        (cand,) = recommend.extra_candidates(SPEC, GP6, UNCERTAIN, SCENARIOS)
+        assert cand.netlist == net and cand.searched == brought

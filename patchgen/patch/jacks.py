@@ -40,13 +40,28 @@ class JackFit:
             self.total.append(tuple(sum(row[i] for row in counts.values()) for i in range(len(ws))))
         # blocks whose own terms do not fit: each needs a pre-summer taking some of them
         self.crowded = {i for i, tot in enumerate(self.total) if any(n > c for n, c in zip(tot, self.cap))}
-        self._staged: dict[tuple[int, int], bool] = {}
+        self._staged: dict[tuple[int, int], bool] = {}  # (block, staged bits) -> fits
+        self._possible: dict[tuple[int, int], bool] = {}  # (block, mismatched bits) -> fits for some
 
     def fits(self, pre: dict[int, int]) -> bool:
         """Every stage's inputs fit: blocks without a pre-summer as they are, the others split."""
         if self.free:
             return True
         return self.crowded <= pre.keys() and all(self._staged_fits(i, staged) for i, staged in pre.items())
+
+    def possible(self, i: int, mismatched: int) -> bool:
+        """Whether block i fits for some choice of shared inverters among its mismatched signals
+        (those not shared go to its pre-summer)."""
+        if self.free:
+            return True
+        key = (i, mismatched)
+        if key not in self._possible:
+            sub, ok = mismatched, i not in self.crowded
+            while sub and not ok:  # every nonempty submask
+                ok = self._staged_fits(i, sub)
+                sub = (sub - 1) & mismatched
+            self._possible[key] = ok
+        return self._possible[key]
 
     def _staged_fits(self, i: int, staged: int) -> bool:
         key = (i, staged)

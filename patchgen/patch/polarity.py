@@ -6,12 +6,15 @@ tries every polarity (itertools.product order) and, per polarity, every set of s
 by size (itertools.combinations of the sorted candidates); the first cheapest that fits the
 jacks wins, so the result is deterministic. Signal sets are integer bitmasks
 (patchgen.patch.jacks.signal_bits), and the pre-summers of a choice are built only when its cost
-can beat the best so far.
+can beat the best so far. Skipped without a change to the result: a polarity with a block that
+fits for no choice of inverters, and a number of inverters that leaves too many pre-summers.
 """
 
 from __future__ import annotations
 
+import functools
 import itertools
+import operator
 
 from patchgen.patch.jacks import JackFit, signal_bits
 from patchgen.patch.realization import Block, Term
@@ -41,6 +44,28 @@ def _mismatch_tables(blocks: list[Block], kept: dict[str, list[Term]], free: lis
     return tables
 
 
+def _mismatches(tables, pols: tuple[int, ...]) -> list[int]:
+    """Each block's mismatched signal bits under the free polarities ``pols``."""
+    masks = []
+    for j_own, per_pol in tables:
+        fixed, by_free = per_pol[0 if j_own is not None and pols[j_own] < 0 else 1]
+        m = fixed
+        for j, neg, pos in by_free:
+            m |= pos if pols[j] > 0 else neg
+        masks.append(m)
+    return masks
+
+
+def _uncovered_at_least(mism: list[tuple[int, int]], k: int) -> int:
+    """Pre-summers every choice of k shared inverters leaves: blocks with more than k mismatched signals."""
+    return sum(1 for _, m in mism if m.bit_count() > k)
+
+
+def _pre_allowed(best: tuple[int, int], k: int) -> int:
+    """The most pre-summers beside k inverters whose cost (k + pre-summers, k) is below ``best``."""
+    return best[0] - k - (0 if k < best[1] else 1)
+
+
 def search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile | None = None):
     """Choose block polarities and shared inverters minimising amplifiers (with inputs that fit);
     returns (P, shared inverters, pre-summers: block -> the signals it stages)."""
@@ -50,20 +75,17 @@ def search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachinePro
     tables = _mismatch_tables(blocks, kept, free, bit)
     best = None  # ((amplifiers, inverters), polarities, shared bits, pre: block index -> bits)
     for pols in itertools.product((-1, 1), repeat=len(free)):
-        mism = []  # (block index, its mismatched bits), blocks in order
-        union = 0
-        for i, (j_own, per_pol) in enumerate(tables):
-            fixed, by_free = per_pol[0 if j_own is not None and pols[j_own] < 0 else 1]
-            m = fixed
-            for j, neg, pos in by_free:
-                m |= pos if pols[j] > 0 else neg
-            if m:
-                mism.append((i, m))
-                union |= m
+        masks = _mismatches(tables, pols)
+        mism = [(i, m) for i, m in enumerate(masks) if m]  # blocks with a mismatched term, in order
+        union = functools.reduce(operator.or_, masks, 0)
+        if not all(fit.possible(i, m) for i, m in enumerate(masks)):
+            continue  # a block that fits for no choice of inverters: nothing here fits
         cand = [1 << n for n in range(union.bit_length()) if union >> n & 1]  # sorted names
         for k in range(len(cand) + 1):
             if best is not None and k >= best[0][0]:
                 break  # k inverters alone cost as much as the best: so does every larger k
+            if best is not None and _uncovered_at_least(mism, k) > _pre_allowed(best[0], k):
+                continue  # every choice of k inverters leaves too many pre-summers to beat the best
             for inv in itertools.combinations(cand, k):
                 shared = sum(inv)
                 # a block with a mismatched term no shared inverter serves gets a pre-summer

@@ -7,7 +7,7 @@ or by one pre-summer per consuming block that collects all its mismatched terms 
 carry a single term with a gain above 1 becomes a unit inverter, the gain on the block's input, so
 that no partial sum amplifies its source toward the rails). The choice
 of polarities and inverters that needs the fewest amplifiers wins (ties: fewer inverters,
-then the first in a fixed order), so the result is deterministic.
+then the first in a fixed order; patchgen.patch.polarity), so the result is deterministic.
 
 Coefficient magnitudes go on the smallest input weight w (the profile's, e.g. x1 and x10) with
 |c| <= w * pot_max, through a pot set to |c|/w; a coefficient equal to a weight needs no pot; one
@@ -17,12 +17,12 @@ above the largest weight is split across inputs or carried by a gain stage
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, replace
 
 from patchgen.inputs.errors import ResourceError
-from patchgen.patch import large_gains
+from patchgen.patch import large_gains, polarity
+from patchgen.patch.jacks import jacks_test, weight_for
 from patchgen.patch.netlist import AmpInput, Amplifier, ControlOutput, Netlist, Pot, SensorInput, Signal
 from patchgen.patch.realization import SENSOR_LABELS, SENSOR_UNITS, Block, Realization, Term
 from patchgen.profiles.machine import MachineProfile, the_machine
@@ -104,73 +104,6 @@ def _plan_terms(real: Realization, machine: MachineProfile):
     return blocks, kept, notes, too_big
 
 
-def _jacks_test(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile | None):
-    """A test of a choice of pre-summers (block -> the signals it stages): whether every stage's
-    x1 and x10 inputs then fit the roomiest amplifier of the machine. Each term's input weight is
-    found once here, not once per choice the polarity search tries."""
-    if machine is None:
-        return lambda pre: True
-    ws = tuple(machine.input_weights)
-    cap = tuple(max(a.input_count(w) for a in machine.amplifiers) for w in ws)
-    lowest = ws.index(min(ws))
-    per_block = []  # (block, signal -> its terms' count per weight, the block's count per weight)
-    for b in blocks:
-        by_signal: dict[str, list[int]] = {}
-        for t in kept[b.name]:
-            by_signal.setdefault(t.signal, [0] * len(ws))[ws.index(weight_for(abs(t.coeff), machine))] += 1
-        total = [sum(row[i] for row in by_signal.values()) for i in range(len(ws))]
-        per_block.append((b.name, by_signal, total))
-
-    def fits(pre: dict[str, set[str]]) -> bool:
-        for name, by_signal, total in per_block:
-            main, staged = list(total), [0] * len(ws)
-            if name in pre:
-                main[lowest] += 1
-                for sig in pre[name]:
-                    for i, n in enumerate(by_signal.get(sig, ())):
-                        main[i] -= n
-                        staged[i] += n
-            if any(m > c or st > c for m, st, c in zip(main, staged, cap)):
-                return False
-        return True
-
-    return fits
-
-
-def _search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile | None = None):
-    """Choose block polarities and shared inverters minimising amplifiers (with inputs that fit)."""
-    free = [b.name for b in blocks if b.name != "u_c"]
-    fits = _jacks_test(blocks, kept, machine)
-    best = None
-    for pols in itertools.product((-1, 1), repeat=len(free)):
-        P = dict(zip(free, pols))
-        P["u_c"] = 1
-        mism: dict[str, set[str]] = {}
-        for b in blocks:
-            for t in kept[b.name]:
-                have = P.get(t.signal, 1)  # sensors are positive
-                need = -P[b.name] * (1 if t.coeff > 0 else -1)
-                if have != need:
-                    mism.setdefault(b.name, set()).add(t.signal)
-        cand = sorted(set().union(*mism.values())) if mism else []
-        for k in range(len(cand) + 1):
-            if best is not None and k >= best[0][0]:
-                break  # k inverters alone cost as much as the best: so does every larger k
-            for inv in itertools.combinations(cand, k):
-                shared = set(inv)
-                # a block with a mismatched term no shared inverter serves gets a pre-summer
-                # (a differentiator takes a single input: a pre-summer feeds it fine)
-                pre = {b: m - shared for b, m in mism.items() if not m <= shared}
-                cost = (k + len(pre), k)
-                if best is not None and cost >= best[0]:
-                    continue
-                if fits(pre):
-                    best = (cost, P, shared, pre)
-    if best is None:  # nothing fits the jacks: keep the cheapest, the emitter names the shortfall
-        return _search(blocks, kept, None)
-    return best[1], best[2], best[3]
-
-
 def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>") -> Netlist:
     """Place the realization on the machine; a shortfall raises ResourceError (one line).
 
@@ -213,7 +146,7 @@ def _place(real: Realization, blocks: list[Block], kept: dict[str, list[Term]], 
            machine: MachineProfile, source: str) -> Netlist:
     """Polarities, inverters and pre-summers for the blocks' terms, then the amplifiers and pots."""
     _check_lower_bound(blocks, kept, machine, source)
-    P, inverted, pre = _search(blocks, kept, machine)
+    P, inverted, pre = polarity.search(blocks, kept, machine)
     inverted = _unit_inverters(blocks, kept, P, inverted, pre, machine)
     stages: list[_Stage] = []
     wanted: dict[tuple[str, str, float], float] = {}
@@ -247,7 +180,7 @@ def _unit_inverters(blocks: list[Block], kept: dict[str, list[Term]], P: dict[st
     partial sum must not amplify its source toward the rails (a lag's input, say, scaled by
     T/tau). Kept as a pre-summer when the block's jacks would not take the extra weighted input."""
     out = set(inverted)
-    fits = _jacks_test(blocks, kept, machine)
+    fits = jacks_test(blocks, kept, machine)
     for b, staged in sorted(pre.items()):
         terms = [t for t in kept[b] if t.signal in staged]
         if len(terms) != 1 or abs(terms[0].coeff) <= 1 or terms[0].signal in out:
@@ -286,12 +219,6 @@ def _check_resources(stages: list[_Stage], machine: MachineProfile, source: str)
                             f"the patch needs {need_amp} amplifiers ({need_int} integrators) and {need_pot} pots; "
                             f"{the_machine(machine.name)} has {have_amp} amplifiers ({have_int} integrators) and "
                             f"{machine.pot_count} pots")
-
-
-def weight_for(mag: float, machine: MachineProfile) -> int:
-    """The smallest input weight that reaches |c| through a pot (the largest if none does)."""
-    ws = sorted(machine.input_weights)
-    return next((w for w in ws if mag <= w * machine.pot_max + 1e-12), ws[-1])
 
 
 def _needs_pot(mag: float, machine: MachineProfile) -> bool:

@@ -1,0 +1,109 @@
+"""The polarity search: block polarities and shared inverters that need the fewest amplifiers.
+
+Every amplifier inverts, so a term c v into a block of polarity P must arrive as -P sign(c) v;
+a signal at the other polarity needs a shared inverter or its block's pre-summer. The search
+tries every polarity (itertools.product order) and, per polarity, every set of shared inverters
+by size (itertools.combinations of the sorted candidates); the first cheapest that fits the
+jacks wins, so the result is deterministic. Signal sets are integer bitmasks
+(patchgen.patch.jacks.signal_bits), and the pre-summers of a choice are built only when its cost
+can beat the best so far. Skipped without a change to the result: a polarity with a block that
+fits for no choice of inverters, and a number of inverters that leaves too many pre-summers.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import operator
+
+from patchgen.patch.jacks import JackFit, signal_bits
+from patchgen.patch.realization import Block, Term
+from patchgen.profiles.machine import MachineProfile
+
+
+def _mismatch_tables(blocks: list[Block], kept: dict[str, list[Term]], free: list[str], bit: dict[str, int]):
+    """Per block and block polarity (index 0: -1, 1: +1): the bits of its terms mismatched whatever
+    the free polarities are, and per free signal j the bits mismatched when P_j is -1 or +1."""
+    slot = {name: j for j, name in enumerate(free)}
+    tables = []
+    for b in blocks:
+        per_pol = []
+        for pb in (-1, 1):
+            fixed, by_free = 0, {}
+            for t in kept[b.name]:
+                need = -pb * (1 if t.coeff > 0 else -1)
+                j = slot.get(t.signal)
+                if j is None:  # sensors, u_c and dropped blocks are positive
+                    if need != 1:
+                        fixed |= bit[t.signal]
+                else:
+                    row = by_free.setdefault(j, [0, 0])
+                    row[0 if need == 1 else 1] |= bit[t.signal]  # mismatched when P_j is -need
+            per_pol.append((fixed, [(j, neg, pos) for j, (neg, pos) in by_free.items()]))
+        tables.append((slot.get(b.name), per_pol))
+    return tables
+
+
+def _mismatches(tables, pols: tuple[int, ...]) -> list[int]:
+    """Each block's mismatched signal bits under the free polarities ``pols``."""
+    masks = []
+    for j_own, per_pol in tables:
+        fixed, by_free = per_pol[0 if j_own is not None and pols[j_own] < 0 else 1]
+        m = fixed
+        for j, neg, pos in by_free:
+            m |= pos if pols[j] > 0 else neg
+        masks.append(m)
+    return masks
+
+
+def _uncovered_at_least(mism: list[tuple[int, int]], k: int) -> int:
+    """Pre-summers every choice of k shared inverters leaves: blocks with more than k mismatched signals."""
+    return sum(1 for _, m in mism if m.bit_count() > k)
+
+
+def _pre_allowed(best: tuple[int, int], k: int) -> int:
+    """The most pre-summers beside k inverters whose cost (k + pre-summers, k) is below ``best``."""
+    return best[0] - k - (0 if k < best[1] else 1)
+
+
+def search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachineProfile | None = None):
+    """Choose block polarities and shared inverters minimising amplifiers (with inputs that fit);
+    returns (P, shared inverters, pre-summers: block -> the signals it stages)."""
+    free = [b.name for b in blocks if b.name != "u_c"]
+    bit = signal_bits(blocks, kept)
+    fit = JackFit(blocks, kept, machine, bit)
+    tables = _mismatch_tables(blocks, kept, free, bit)
+    best = None  # ((amplifiers, inverters), polarities, shared bits, pre: block index -> bits)
+    for pols in itertools.product((-1, 1), repeat=len(free)):
+        masks = _mismatches(tables, pols)
+        mism = [(i, m) for i, m in enumerate(masks) if m]  # blocks with a mismatched term, in order
+        union = functools.reduce(operator.or_, masks, 0)
+        if not all(fit.possible(i, m) for i, m in enumerate(masks)):
+            continue  # a block that fits for no choice of inverters: nothing here fits
+        cand = [1 << n for n in range(union.bit_length()) if union >> n & 1]  # sorted names
+        for k in range(len(cand) + 1):
+            if best is not None and k >= best[0][0]:
+                break  # k inverters alone cost as much as the best: so does every larger k
+            if best is not None and _uncovered_at_least(mism, k) > _pre_allowed(best[0], k):
+                continue  # every choice of k inverters leaves too many pre-summers to beat the best
+            for inv in itertools.combinations(cand, k):
+                shared = sum(inv)
+                # a block with a mismatched term no shared inverter serves gets a pre-summer
+                # (a differentiator takes a single input: a pre-summer feeds it fine)
+                cost = (k + sum(1 for _, m in mism if m & ~shared), k)
+                if best is not None and cost >= best[0]:
+                    continue
+                pre = {i: m & ~shared for i, m in mism if m & ~shared}
+                if fit.fits(pre):
+                    best = (cost, pols, shared, pre)
+    if best is None:  # nothing fits the jacks: keep the cheapest, the emitter names the shortfall
+        return search(blocks, kept, None)
+    _, pols, shared, pre = best
+    names = {b: s for s, b in bit.items()}
+
+    def signals(mask: int) -> set[str]:
+        return {names[1 << n] for n in range(mask.bit_length()) if mask >> n & 1}
+
+    P = dict(zip(free, pols))
+    P["u_c"] = 1
+    return P, signals(shared), {blocks[i].name: signals(m) for i, m in pre.items()}

@@ -13,8 +13,9 @@ from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.render.sheet import SheetSection
 from patchgen.studies.bench_sheet import predicted_patch_files
+from patchgen.studies.candidate import Candidate, Recommendation
 from patchgen.studies.ranking import ROUND_RUNS, TARGET
-from patchgen.studies.recommend import CORNER_RUNS, Candidate, Recommendation, chosen_spec
+from patchgen.studies.recommend import CORNER_RUNS, chosen_spec
 from patchgen.studies.robust import ALTERNATIVES, WHY_GAINS
 
 RECOMMENDED_SPEC = "recommended.toml"

@@ -15,7 +15,6 @@ import math
 import numpy as np
 
 from patchgen.identify import motion
-from patchgen.identify.csvtext import format_table
 from patchgen.identify.figures import (
     ASSUMED_ANGLE_UNCERTAINTY_DEG,
     ASSUMED_DISTANCE_UNCERTAINTY_M,
@@ -47,9 +46,9 @@ FILES = ("masses.toml", "calibration.csv", "actuator-step.csv", "actuator-ramp.c
 
 def _csv(test: str, header: tuple[str, ...], cols: list[np.ndarray], about: str) -> bytes:
     lines = [f"# test = {test}", f"# {about}", ", ".join(header)]
-    data = np.column_stack([np.asarray(c, dtype=float) for c in cols])
-    if data.shape[0]:  # each cell as "%.10g" (time) or "%.7g" writes it
-        lines.append(format_table(data, tuple(10 if h == "t_s" else 7 for h in header)))
+    row = ", ".join("%.10g" if h == "t_s" else "%.7g" for h in header)
+    data = np.column_stack([np.asarray(c, dtype=float) for c in cols]).tolist()
+    lines.extend(row % tuple(r) for r in data)  # one format per row: the same text as cell by cell
     return ("\n".join(lines) + "\n").encode()
 
 

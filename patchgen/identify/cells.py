@@ -196,9 +196,3 @@ def read_plain(text: np.ndarray, ncols: int, out: np.ndarray) -> int:
         else:
             return 0
     return status
-
-
-@nb.njit(cache=True)
-def plain_lines(text: np.ndarray, ncols: int) -> bool:
-    """Whether ``text`` (ASCII codes) is lines of exactly ncols plain numbers (read_plain)."""
-    return read_plain(text, ncols, np.empty(0)) != 0

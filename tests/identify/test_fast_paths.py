@@ -14,8 +14,8 @@ import pytest
 from scipy.optimize import minimize
 from scipy.signal import lfilter
 
-from patchgen.identify import actuator, csvtext, filters, kalman, lag_grid
-from patchgen.identify.cells import PLAIN, plain_lines, read_plain
+from patchgen.identify import actuator, filters, kalman, lag_grid
+from patchgen.identify.cells import PLAIN, read_plain
 
 ALPHABET = list("0123456789") * 3 + list(".+-eE ,\t\n") + ["x", "_", "#"]
 
@@ -26,16 +26,21 @@ def _regex_lines(text: str, ncols: int) -> bool:
     return re.fullmatch(rf"(?:{line}\n)*{line}", text) is not None
 
 
+def _reads(text: str, ncols: int) -> bool:
+    """Whether read_plain takes the text as lines of ncols plain numbers."""
+    return read_plain(np.frombuffer(text.encode("ascii"), np.uint8), ncols, np.empty(0)) != 0
+
+
 @pytest.mark.parametrize("text, ncols, expected", [
     ("0.5, -1e-3,+2.", 3, True), (".5,1.e5\n 3 ,\t4E+07", 2, True), ("1,2\n", 2, False), ("1,2\n\n3,4", 2, False),
     ("1 2", 1, False), (".", 1, False), ("1e", 1, False), ("-.e1", 1, False), ("1,2,3", 2, False), ("1", 2, False),
     ("nan", 1, False), ("1_000", 1, False), ("", 1, False)])
-def test_plain_lines_reads_what_the_regular_expression_matches(text, ncols, expected):
+def test_read_plain_takes_what_the_regular_expression_matches(text, ncols, expected):
     assert _regex_lines(text, ncols) is expected
-    assert plain_lines(np.frombuffer(text.encode("ascii"), np.uint8), ncols) is expected
+    assert _reads(text, ncols) is expected
 
 
-def test_plain_lines_agrees_with_the_regular_expression_on_random_text():
+def test_read_plain_agrees_with_the_regular_expression_on_random_text():
     rng = np.random.default_rng(5)
     agree = matched = 0
     for _ in range(20000):
@@ -43,7 +48,7 @@ def test_plain_lines_agrees_with_the_regular_expression_on_random_text():
         text = "".join(rng.choice(ALPHABET, size=int(rng.integers(0, 14))))
         want = _regex_lines(text, ncols)
         matched += want
-        agree += want == plain_lines(np.frombuffer(text.encode("ascii"), np.uint8), ncols)
+        agree += want == _reads(text, ncols)
     assert agree == 20000 and matched > 500
 
 
@@ -115,31 +120,6 @@ def test_grid_start_is_the_cell_by_cell_search(with_zero):
             if rss < best[0]:
                 best = (rss, [c[0], c[1] if with_zero else 0.0, tau, dz, c[-1]])
     assert np.array_equal(lag_grid.grid_start(u, f, dt, with_zero), np.array(best[1]))
-
-
-def _python_table(values: np.ndarray, precisions: tuple[int, ...]) -> str:
-    row = ", ".join(f"%.{p}g" for p in precisions)
-    return "\n".join(row % tuple(r) for r in values.tolist())
-
-
-@pytest.mark.parametrize("precisions", [(7,), (10,), (10, 7), (1,), (3,)])
-def test_format_table_writes_what_python_writes(precisions):
-    rng = np.random.default_rng(11)
-    n = 40000 - 40000 % len(precisions)
-    special = [0.0, -0.0, 0.5, 2.5, 1e-4, 9.9999995e-5, 1e-5, 0.00099999995, 9999999.5, 1e7, 1e22, 1e23, 1e-300,
-               5e-324, 1.7976931348623157e308, 1234567.5, 12345678.5, 999999.95, 0.1, 0.3]
-    columns = [rng.choice([-1, 1], n) * 10.0 ** rng.uniform(-30, 30, n), 1e-3 * rng.standard_normal(n),
-               np.arange(n) * 0.005, np.round(rng.standard_normal(n) * 1e4) / 2,
-               np.resize(np.array(special + [-v for v in special]), n)]
-    for values in columns:
-        table = values.reshape(-1, len(precisions))
-        assert csvtext.format_table(table, precisions) == _python_table(table, precisions)
-
-
-def test_format_table_leaves_what_it_cannot_write_to_python():
-    table = np.array([[1.0, np.nan], [np.inf, -2.5]])
-    assert csvtext.format_table(table, (7, 7)) == "1, nan\ninf, -2.5"
-    assert csvtext.format_table(np.array([[0.1]]), (17,)) == "0.10000000000000001"
 
 
 def test_ml_fit_minimises_as_l_bfgs_b_with_its_own_differences():

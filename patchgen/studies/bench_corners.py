@@ -119,7 +119,7 @@ def _worst_swing(res: SimResult, saturation_V: float) -> float:
 
 def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, scenario: Scenario,
           *, seed: int | None = None, corner_runs: int, drawn: SimResult | None = None, ends: bool = False,
-          ideal: bool = False, stop: Callable[[CornerOutcome], bool] | None = None,
+          ideal: bool = False, stop: Callable[[list[CornerOutcome]], bool] | None = None,
           known: Sequence[CornerOutcome] = (), progress: Callable[[int, int], None] | None = None) -> BenchStudy:
     """The patch at every corner of the bench's ranges (and each end of each range, if asked).
 
@@ -144,8 +144,8 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
     ideal : bool
         Every imperfection off (only the ranges an ideal run feels).
     stop : callable, optional
-        ``stop(corner)`` after each corner: True ends the study there (it then has fewer corners
-        than the box: a search's candidate already beaten).
+        ``stop(corners so far)`` after each corner: True ends the study there (a search's
+        candidate already beaten; the study may then have fewer corners than the box).
     known : sequence of CornerOutcome, optional
         Corners already run with these very inputs (the same patch, plant, bench, machine,
         scenario, seed, runs and mode: the robust search's): taken as they are, not run again.
@@ -181,7 +181,7 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
     done_corners = []
     for v in corners:
         done_corners.append(run(v))
-        if stop is not None and stop(done_corners[-1]) and len(done_corners) < len(corners):
+        if stop is not None and stop(done_corners):
             break
     return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
                       tuple(done_corners), rest, tuple(run(v) for v in singles))

@@ -32,7 +32,7 @@ from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
-from patchgen.studies.bench_corners import BenchStudy, cart_excursion, corner_values, study
+from patchgen.studies.bench_corners import BenchStudy, CornerOutcome, cart_excursion, study
 
 # Bryson excursions times these (theta, s, s_dot, u); integral of s off, then on
 WEIGHT_GRID = {"theta": (1.0, 0.5), "s": (1.0, 0.5), "s_dot": (1.0, 1 / 3), "u": (1.0,)}
@@ -114,6 +114,12 @@ def _key(held: int, room: float) -> tuple[int, float]:
     return held, -round(room, 4)
 
 
+def _rank(corners: list[CornerOutcome], held: int, room: float) -> tuple[int, float]:
+    """The rank of a point whose other scenarios held ``held`` at worst with excursion ``room``,
+    given these corners of the present one."""
+    return _key(min([held] + [c.outcome.held for c in corners]), max([room] + [cart_excursion(c) for c in corners]))
+
+
 def beaten(key: tuple[int, float], best_key: tuple[int, float] | None) -> bool:
     """Whether a point whose corners so far rank ``key`` can no longer beat the best: more corners
     only lower its worst corner's runs held and raise its excursion, so its rank only falls, and
@@ -159,17 +165,15 @@ def search(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scena
         tried += 1
         worst, room, studies = None, 0.0, []
         for sc in order:
-            held_so_far = SEARCH_RUNS if worst is None else worst[1].outcome.held
+            held = SEARCH_RUNS if worst is None else worst[1].outcome.held
             st = study(net, plant_params(d.spec), bench, machine, sc, seed=seed, corner_runs=SEARCH_RUNS,
-                       stop=lambda c, h=held_so_far, r=room, b=best_key: beaten(_key(min(h, c.outcome.held),
-                                                                         max(r, cart_excursion(c))), b))
+                       stop=lambda done, h=held, r=room, b=best_key: beaten(_rank(done, h, r), b))
             studies.append(st)
             w = st.worst_corner
             if worst is None or w.outcome.held < worst[1].outcome.held:
                 worst = (sc.name, w)
             room = max(room, excursion(st))
-            if (len(st.corners) < len(corner_values(bench, st.ranges)[0])
-                    or beaten(_key(worst[1].outcome.held, room), best_key)):
+            if beaten(_key(worst[1].outcome.held, room), best_key):  # so is every study cut short
                 worst = None
                 break  # dropped: already no better than the best, whatever its other corners do
         if worst is None:

@@ -187,9 +187,9 @@ def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]) -> Draws:
 def run_batch(cfg: EngineConfig, draws: Draws, n_history: int) -> BatchOutput:
     """One run per row of ``draws``, in blocks of LANES runs side by side.
 
-    The blocks run in parallel threads (run_block releases the GIL; as many threads as numba's
-    numba.get_num_threads(), the cores by default); a batch of one block runs in this thread (a thread
-    launch costs more than the block on a busy machine). Threads of Python, not a numba parallel
+    The blocks run in parallel threads (run_block releases the GIL; numba.get_num_threads() of
+    them, the cores by default); a batch of one block runs in this thread (a thread launch costs
+    more than the block on a busy machine). Threads of Python, not a numba parallel
     loop: that loop would be a second compilation of the whole kernel (about 9 s on a first run).
 
     Parameters

@@ -101,7 +101,8 @@ class Candidate:
         return next((list(o.results) for o in self.outcomes if o.scenario == scenario), [])
 
     def rank_key(self, order: int) -> tuple:
-        """Sort key, best first (see the module docstring); ``order`` is the candidate's place."""
+        """Sort key, best first (the order patchgen.studies.recommend's docstring gives); ``order``
+        is the candidate's place."""
         if not self.simulated:
             return (1, 1, len(DECISIONS), 0.0, 0.0, 0.0, 0, 0, 0, order)
 

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from patchgen.bench import bench_spread as bs
-from patchgen.bench.circuit import Circuit
+from patchgen.bench.circuit import INTEGRATOR, Circuit
 from patchgen.bench.engine import EngineConfig, default_step, noise_process
 from patchgen.bench.kernel import (
     DIST_CART_FORCE,
@@ -22,7 +22,7 @@ from patchgen.bench.kernel import (
     Wiring,
 )
 from patchgen.bench.lanes import ACT_GAIN, ACT_LAG, ACT_LAG_ZERO
-from patchgen.bench.noise_drift import noise_and_drift
+from patchgen.bench.noise_drift import NoiseAndDrift, noise_and_drift
 from patchgen.bench.results import SimSettings
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
@@ -137,7 +137,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         wiring=Wiring(kind=_i64(circuit.amp_kind), in_ptr=_i64(circuit.in_ptr), in_src=_i64(circuit.in_src),
                       in_gain=_f64(circuit.in_gain), param1=_f64(circuit.param1),
                       param2=_f64(circuit.param2), ic=_f64(circuit.ic_V),
-                      drift=_f64(np.where(circuit.drifting(), drift, 0.0))),
+                      drift=_f64(_drifts(circuit, levels, machine))),
         disturbances=Disturbances(kind=_i64(kinds), t0=_f64(t0s), t1=_f64(t1s), value=_f64(vals)),
         plant=_f64([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c, plant.d / 2]),
         plant_spread=_f64([spread.get(k, 0.0) for k in SPREAD_ORDER]),
@@ -160,6 +160,13 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         bench_distribution=bench.uncertainty.distribution if ranges else None,
     )
     return cfg, settings
+
+
+def _drifts(circuit: Circuit, levels: NoiseAndDrift, machine: MachineProfile) -> np.ndarray:
+    """Each amplifier's drift magnitude, V/s: an integrator's at its mode's rate k0 (param1), a
+    lag's at the run's rate, none for the others (NoiseAndDrift.drift_at)."""
+    return np.array([levels.drift_at(float(circuit.param1[j]) if k == INTEGRATOR else None, machine) if d else 0.0
+                     for j, (k, d) in enumerate(zip(circuit.amp_kind, circuit.drifting()))])
 
 
 def _f64(values) -> np.ndarray:

@@ -31,6 +31,15 @@ class NoiseAndDrift:
     tip_force_N_rms: float = 0.0
     force_bandwidth_Hz: float = 0.0
 
+    def drift_at(self, k0_per_s: float | None, machine: MachineProfile) -> float:
+        """The drift of one integrating amplifier, V/s: the run's rate, which is at the machine's
+        time scale (its slowest integrator mode), times how much faster the amplifier's mode
+        integrates (e_os/(R C) + i_b/C grows as 1/C); a lag (``k0_per_s`` None) at the run's rate."""
+        if k0_per_s is None or not self.drift_V_per_s:
+            return self.drift_V_per_s
+        ratio = k0_per_s * machine.time_scale_s
+        return self.drift_V_per_s if ratio == 1.0 else self.drift_V_per_s * ratio
+
     @property
     def noisy(self) -> bool:
         """True when any sensor or amplifier has noise, or the plant a random force."""

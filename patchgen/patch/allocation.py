@@ -21,9 +21,9 @@ import math
 from dataclasses import dataclass, replace
 
 from patchgen.inputs.errors import ResourceError
-from patchgen.patch import large_gains, polarity
+from patchgen.patch import large_gains, polarity, time_scales
 from patchgen.patch.jacks import jacks_test, weight_for
-from patchgen.patch.netlist import AmpInput, Amplifier, ControlOutput, Netlist, Pot, SensorInput, Signal
+from patchgen.patch.netlist import AmpInput, Amplifier, ControlOutput, Mode, Netlist, Pot, SensorInput, Signal
 from patchgen.patch.realization import SENSOR_LABELS, SENSOR_UNITS, Block, Realization, Term
 from patchgen.profiles.machine import MachineProfile, the_machine
 
@@ -76,7 +76,7 @@ def _plan_terms(real: Realization, machine: MachineProfile):
             if mag > top * machine.pot_max + 1e-12:
                 # .5g: a coefficient just over the top must not print as the top itself
                 too_big.append((mag, f"coefficient {t.coeff:.5g} of {t.signal} into {b.name} exceeds {top:g}, the "
-                                     f"most one x{top} input gives"))
+                                     f"most one x{top} input gives" + _rate_words(b, t, machine)))
             if mag < res / 2 or (mag < res and real.below_resolution != "round"):
                 if real.below_resolution == "minimum":
                     notes.append(f"{t.signal} -> {b.name}: design coefficient {t.coeff:.3g} is below the {reading} "
@@ -108,8 +108,10 @@ def allocate(real: Realization, machine: MachineProfile, source: str = "<spec>")
     """Place the realization on the machine; a shortfall raises ResourceError (one line).
 
     A coefficient above the largest input weight is split across inputs, else carried by a gain
-    stage (patchgen.patch.large_gains); only when neither fits is it the error.
+    stage (patchgen.patch.large_gains); only when neither fits is it the error. Each integrator
+    is first put on the slowest mode that carries its coefficients (patchgen.patch.time_scales).
     """
+    real = time_scales.assign(real, machine)
     blocks, kept, notes, over = _plan_terms(real, machine)
     too_big = [said for _, said in sorted(over, key=lambda o: -o[0])]
     if not too_big:
@@ -305,6 +307,7 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                                              f"partial {quantity}",
                                              polarity=st.out_polarity, volts_per_unit=vpu, unit=unit),
                               ic_V=0.0 if st.role in ("integrator", "lag") else None,
+                              mode=_mode(b, machine) if st.role == "integrator" else None,
                               T_d_s=b.T_d_s if b is not None else None,
                               rolloff_s=b.rolloff_s if b is not None else None,
                               tau_s=b.tau_s if b is not None else None, purpose=purpose))
@@ -316,6 +319,23 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                    pot_resolution=res, sensors=sensors, amplifiers=amps, pots=pots,
                    output=ControlOutput(source=slot["u_c"], K_U_N_per_V=real.K_U),
                    operation=operation, notes=list(real.notes) + notes)
+
+
+def _rate_words(b: Block, t: Term, machine: MachineProfile) -> str:
+    """What an integrator's too-large coefficient means: the rate it needs against what the
+    machine's fastest integrator mode reaches through one input (time_scales puts such a block there)."""
+    if b.kind != "integrate":
+        return ""
+    m = machine.modes()[-1]
+    return (f" (an integrator rate of {abs(t.coeff) * m.k0_per_s:.4g} 1/s; {the_machine(machine.name)}'s fastest mode, "
+            f"{m.name}, k0 {m.k0_per_s:g} 1/s, reaches {large_gains.top_gain(machine) * m.k0_per_s:.4g} 1/s)")
+
+
+def _mode(b: Block | None, machine: MachineProfile) -> Mode:
+    """An integrator's mode as the netlist records it (the machine's slowest for a block without one)."""
+    modes = machine.modes()
+    m = next((m for m in modes if b is not None and m.name == b.mode), modes[0])
+    return Mode(name=m.name, k0_per_s=m.k0_per_s, jumper=m.jumper)
 
 
 def _next_pot(pots: list[Pot], amp_id: str, machine: MachineProfile) -> str:

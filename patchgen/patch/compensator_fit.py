@@ -99,10 +99,10 @@ def _db(x: float | None) -> str:
 
 
 def laws(design: Design, machine: MachineProfile, method: str = "auto") -> list[tuple[int, str, comp.Compensator]]:
-    """The minimal law (modes faster than a gain stage into a full-weight input reaches, the top
-    gain squared, residualised) and each
+    """The minimal law (modes faster than a gain stage into a full-weight input of the fastest
+    integrator mode reaches, the top gain squared times its k0, residualised) and each
     lower order down to the integral part alone: (order, method, law), highest order first."""
-    fastest = large_gains.top_gain(machine) ** 2 / machine.time_scale_s
+    fastest = large_gains.top_gain(machine) ** 2 * max(m.k0_per_s for m in machine.integrator_modes)
     full = comp.without_fast_modes(comp.compensator(design), fastest)
     out = [(full.order, "minimal", full)]
     methods = METHODS if method == "auto" else (method,)

@@ -1,9 +1,10 @@
 """The netlist: what is patched on the machine, as a versioned JSON document.
 
-Schema id ``patchgen.netlist/2`` (2 added ``parts``, the external parts a patch needs). Ideal
-meaning of each amplifier role (all amplifiers invert;
-``k_j`` is the pot setting feeding input j, or 1 with no pot; ``w_j`` the input weight 1 or 10;
-``T`` the machine time scale):
+Schema id ``patchgen.netlist/3`` (2 added ``parts``, the external parts a patch needs; 3 each
+integrator's ``mode``, its rate k0 and how it is selected). Ideal meaning of each amplifier role
+(all amplifiers invert; ``k_j`` is the pot setting feeding input j, or 1 with no pot; ``w_j`` the
+input weight 1 or 10; ``T`` the integrator's time scale 1/k0 of its mode, or the netlist's
+``time_scale_s`` for an integrator that names no mode):
 
 - summer, inverter: ``out = -sum_j w_j k_j v_j``
 - integrator:       ``d(out)/dt = -(1/T) sum_j w_j k_j v_j``, ``out(0) = ic_V``
@@ -27,7 +28,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-SCHEMA_ID = "patchgen.netlist/2"
+SCHEMA_ID = "patchgen.netlist/3"
 
 AmpRole = Literal["integrator", "summer", "inverter", "differentiator", "lag"]
 
@@ -64,6 +65,15 @@ class AmpInput(_Doc):
     jack: str = Field(description="which input jack of the amplifier, e.g. x1a, x10b")
 
 
+class Mode(_Doc):
+    """An integrator's mode as the machine profile states it: its rate and how it is selected."""
+
+    name: str = Field(description="the profile's name for the mode, e.g. 'standard' or 'SLOW'")
+    k0_per_s: float = Field(gt=0, description="1/s: d(out)/dt = -k0 x (a x1 input at 1 V); T = 1/k0")
+    jumper: str | None = Field(default=None, description="the integrator's jack patched to its own output to "
+                                                         "select the mode (a cord on the wire list), or none")
+
+
 class Amplifier(_Doc):
     """One amplifier as patched: role, inputs, the signal it carries and its element values."""
 
@@ -72,6 +82,7 @@ class Amplifier(_Doc):
     inputs: list[AmpInput]
     carries: Signal
     ic_V: float | None = Field(default=None, description="initial condition (integrators, lags)")
+    mode: Mode | None = Field(default=None, description="an integrator's mode (its k0); none for other roles")
     T_d_s: float | None = Field(default=None, description="differentiator gain time constant")
     rolloff_s: float | None = Field(default=None, description="differentiator roll-off time constant")
     tau_s: float | None = Field(default=None, description="lag time constant")
@@ -135,7 +146,7 @@ class Netlist(_Doc):
     machine_name: str
     units: int = 1
     reference_V: float
-    time_scale_s: float
+    time_scale_s: float = Field(description="the slowest integrator mode's 1/k0, at which the law was scaled")
     pot_resolution: float
     sensors: list[SensorInput]
     amplifiers: list[Amplifier]
@@ -176,8 +187,8 @@ def json_schema() -> dict:
 
 def wire_list(net: Netlist) -> list[tuple[str, str]]:
     """Every patch cord as (from, to), in a stable order: pots fed first, then amplifier inputs (a
-    differentiator's through its external capacitor and series resistor), then parts across a
-    feedback; on slaved units, grouped by the unit each cord ends on."""
+    differentiator's through its external capacitor and series resistor), an integrator's mode
+    jumper, then parts across a feedback; on slaved units, grouped by the unit each cord ends on."""
     wires: list[tuple[str, str]] = []
     for p in net.pots:
         wires.append((_jack_name(net, p.source), f"{p.id} top"))
@@ -193,6 +204,8 @@ def wire_list(net: Netlist) -> list[tuple[str, str]]:
                           (res.id, f"{a.id} summing junction")]
                 continue
             wires.append((src, f"{a.id} in {inp.jack} (x{inp.weight})"))
+        if a.mode is not None and a.mode.jumper:
+            wires.append((f"{a.id} {a.mode.jumper}", f"{a.id} out ({a.mode.name}: k0 {a.mode.k0_per_s:g} 1/s)"))
         for x in net.parts:
             if x.amplifier == a.id and x.jack is None:
                 wires.append((f"{x.id} ({x.fit})", f"across {a.id} feedback: summing junction to output"))

@@ -176,11 +176,12 @@ def read(net: Netlist, default_rolloff_s: float | None = None) -> Reading:
 
 def _stage(a, feeds: tuple[Feed, ...], time_scale_s: float, default_rolloff_s: float | None, src: str,
            i: int) -> Stage:
-    """One amplifier's element values: a lag needs its tau; a differentiator's T_d defaults to the
-    machine's time scale and its roll-off to the machine's default."""
+    """One amplifier's element values: an integrator's time scale is its mode's; a lag needs its
+    tau; a differentiator's T_d defaults to the machine's time scale and its roll-off to the
+    machine's default."""
     ic = a.ic_V or 0.0
-    if a.role == "integrator":
-        return Stage(a.id, a.role, feeds, ic, T_s=time_scale_s)
+    if a.role == "integrator":  # its mode's 1/k0, or the netlist's time scale (a schema-2 netlist)
+        return Stage(a.id, a.role, feeds, ic, T_s=1.0 / a.mode.k0_per_s if a.mode is not None else time_scale_s)
     if a.role == "lag":
         if not a.tau_s or a.tau_s <= 0:
             raise InputError(src, f"amplifiers[{i}].tau_s", "a lag amplifier needs tau_s > 0")

@@ -4,7 +4,9 @@ Every signal on the machine is a voltage ``volts_per_unit * quantity``. Sensors 
 s_dot (table A.2). Other signals come from blocks the allocator will put on amplifiers:
 
 - ``sum``:           v = sum_j c_j v_j
-- ``integrate``:     dv/dt = (1/T) sum_j c_j v_j           (T: the machine's time scale)
+- ``integrate``:     dv/dt = (1/T) sum_j c_j v_j           (T: the machine's time scale, its
+                     slowest integrator mode's; patchgen.patch.time_scales may move a block to a
+                     faster mode, rescaling its coefficients, and names the mode)
 - ``differentiate``: (rolloff s + 1) v = T_d s sum_j c_j v_j
 - ``lag``:           (tau s + 1) v = sum_j c_j v_j  (built as an integrator with its own output
                      fed back through a pot when the coefficients allow: see lag_block)
@@ -56,6 +58,7 @@ class Block:
     T_d_s: float | None = None
     rolloff_s: float | None = None
     tau_s: float | None = None
+    mode: str | None = None  # an integrate block's integrator mode (patchgen.patch.time_scales)
 
 
 @dataclass(frozen=True)

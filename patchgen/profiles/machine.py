@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded
@@ -65,6 +65,23 @@ class Imperfections(InputModel):
     differentiator_rolloff_s: Real = bounded(1e-4, 1)
     drift_source: str = Field(default="profile figure", min_length=1, max_length=200,
                               description="where the drift figures come from (printed beside the drift rate)")
+
+
+class IntegratorMode(InputModel):
+    """One way an integrator can be set to integrate: its rate k0 = 1/(R C) on a x1 input (a
+    weight-w input integrates w times faster), how the technician selects it, and the source."""
+
+    name: str = Field(min_length=1, max_length=40, description="the mode's name, e.g. 'standard' or 'SLOW'")
+    k0_per_s: Real = bounded(1e-6, 1e9, description="1/s: d(out)/dt = -k0 x (a x1 input at 1 V)")
+    jumper: str | None = Field(default=None, min_length=1, max_length=40,
+                               description="the integrator's jack patched to its own output to select "
+                                           "this mode (THE ANALOG THING: SLOW); none for the default")
+    source: str = Field(default="profile figure", min_length=1, max_length=200)
+
+    @property
+    def time_scale_s(self) -> float:
+        """T = 1/k0: the time a x1 input at one machine unit takes to ramp the output one unit."""
+        return 1.0 / self.k0_per_s
 
 
 # What a procedure step may name, filled in for each patch (see Procedure.steps)
@@ -133,7 +150,10 @@ class MachineProfile(InputModel):
     id: str = Field(min_length=1)
     name: str
     reference_V: Real = bounded(0, 1000, open_lo=True)
-    time_scale_s: Real = bounded(1e-6, 1e6)
+    time_scale_s: Real | None = bounded(1e-6, 1e6, default=None,
+                                       description="integrator time scale T = 1/k0 of a machine with one "
+                                                   "integrator mode; with integrator_modes, the slowest's")
+    integrator_modes: list[IntegratorMode] = Field(default_factory=list, max_length=10)
     pot_count: Int = bounded(0, 1000)
     pot_resolution: Real = bounded(1e-9, 0.5)
     pot_max: Real = bounded(0, 100, open_lo=True)
@@ -146,6 +166,23 @@ class MachineProfile(InputModel):
     components: Components
     imperfections: Imperfections
 
+    @model_validator(mode="after")
+    def _one_time_scale(self) -> MachineProfile:
+        """Fill in what the profile left to be derived: a single-mode machine's one mode from its
+        time_scale_s, a multi-mode machine's time_scale_s from its slowest mode (the scale every
+        realisation is built at; patchgen.patch.time_scales moves a block to a faster mode).
+        Neither or both given is refused by load_machine with the field named."""
+        if self.integrator_modes and self.time_scale_s is None:
+            object.__setattr__(self, "time_scale_s", 1.0 / min(m.k0_per_s for m in self.integrator_modes))
+        elif not self.integrator_modes and self.time_scale_s is not None:
+            object.__setattr__(self, "integrator_modes", [IntegratorMode(
+                name="standard", k0_per_s=1.0 / self.time_scale_s, source="time_scale_s")])
+        return self
+
+    def modes(self) -> list[IntegratorMode]:
+        """The integrator modes, slowest first (the order a block is tried in)."""
+        return sorted(self.integrator_modes, key=lambda m: m.k0_per_s)
+
     def slaved(self, units: int) -> MachineProfile:
         """``units`` machines slaved together as one: amplifiers U1.A1 ... U2.A8, pots times units."""
         if units == 1:
@@ -154,11 +191,13 @@ class MachineProfile(InputModel):
         return self.model_copy(update={"amplifiers": amps, "pot_count": self.pot_count * units, "units": units,
                                        "name": f"{self.name} x{units} (slaved)"})
 
-    def integrator_drift_V_per_s(self) -> float:
-        """Drift rate of an integrator with no input: e_os/(R C) + i_b/C (gp6.md)."""
-        c = self.components
-        return (self.imperfections.integrator_offset_V / (c.input_resistor_x1_ohm * c.integrator_capacitor_F)
-                + self.imperfections.integrator_bias_A / c.integrator_capacitor_F)
+    def integrator_drift_V_per_s(self, time_scale_s: float | None = None) -> float:
+        """Drift rate of an integrator with no input: e_os/(R C) + i_b/C (gp6.md), with C the
+        capacitor that gives the integrator's time scale T = R C on its x1 input resistor R (the
+        slowest mode's by default): a faster mode drifts faster in proportion."""
+        R = self.components.input_resistor_x1_ohm
+        C = (self.time_scale_s if time_scale_s is None else time_scale_s) / R
+        return self.imperfections.integrator_offset_V / (R * C) + self.imperfections.integrator_bias_A / C
 
 
 def load_machine(name_or_path: str, source: str = "", field: str = "machine") -> MachineProfile:
@@ -175,11 +214,25 @@ def load_machine(name_or_path: str, source: str = "", field: str = "machine") ->
         The checked profile (amplifier ids unique, input keys among the weights); a bad value
         raises InputError naming the profile file and field.
     """
-    return load_profile(MachineProfile, name_or_path, "machine", source, field, check=_check_amplifiers)
+    return load_profile(MachineProfile, name_or_path, "machine", source, field, check=_check_profile)
 
 
-def _check_amplifiers(profile: MachineProfile, source: str) -> None:
-    """Amplifier ids are unique and their input keys name the profile's weights."""
+def _check_profile(profile: MachineProfile, source: str) -> None:
+    """One time scale given (time_scale_s or integrator_modes), mode names unique, at most one
+    mode without a jumper; amplifier ids unique and their input keys the profile's weights."""
+    if {"time_scale_s", "integrator_modes"} <= profile.model_fields_set:
+        raise InputError(source, "time_scale_s", "give time_scale_s (one integrator mode) or [[integrator_modes]], "
+                         "not both")
+    if not profile.integrator_modes:
+        raise InputError(source, "time_scale_s", "missing: give time_scale_s (one integrator mode) or "
+                         "[[integrator_modes]]")
+    names = [m.name for m in profile.integrator_modes]
+    for i, m in enumerate(profile.integrator_modes):
+        if names.index(m.name) != i:
+            raise InputError(source, f"integrator_modes[{i}].name", f"{m.name!r} is used twice")
+    if sum(m.jumper is None for m in profile.integrator_modes) > 1:
+        raise InputError(source, "integrator_modes", "more than one mode without a jumper: the technician could "
+                         "not tell them apart")
     keys = {f"x{w}" for w in profile.input_weights}
     seen: set[str] = set()
     for i, a in enumerate(profile.amplifiers):

@@ -119,7 +119,7 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "role": a.role,
         "carries": _carries(a),
         "inputs": [_input_text(inp, source_name) for inp in a.inputs],
-        "settings": _amp_settings(a),
+        "settings": _amp_settings(a, net.time_scale_s),
         "purpose": a.purpose,
     } for a in net.amplifiers]
 
@@ -188,7 +188,24 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "resolution": f"{net.pot_resolution:g}",
         "pot_reading": procedure.pot_reading,
         "output_amp": net.output.source,
+        "time_scale": time_scale_text(net),
     }
+
+
+def time_scale_text(net: Netlist) -> str:
+    """The header's word on the integrators' time scale: the one time scale of a machine with one
+    integrator mode (``time scale 1 s``), else each mode the patch uses, with how to select it."""
+    used = sorted({(a.mode.k0_per_s, a.mode.name, a.mode.jumper or "") for a in net.amplifiers if a.mode is not None})
+    if not used or (len(used) == 1 and not used[0][2] and used[0][0] * net.time_scale_s == 1.0):
+        return f"time scale {net.time_scale_s:g} s"
+    return "integrators at " + " and ".join(f"k0 {k0:g} 1/s ({_mode_words(name, jumper)})" for k0, name, jumper in used)
+
+
+def _mode_words(name: str, jumper: str) -> str:
+    """How an integrator mode is selected, in the sheet's words: 'SLOW patched to OUT'."""
+    if not jumper:
+        return name
+    return f"{jumper} patched to OUT" if jumper == name else f"{name}: {jumper} patched to OUT"
 
 
 def gain_unit(state: str) -> str:
@@ -215,8 +232,12 @@ def _input_text(inp, source_name) -> str:
     return f"{inp.jack} ← {source_name(inp.source)}{via}"
 
 
-def _amp_settings(a: Amplifier) -> str:
+def _amp_settings(a: Amplifier, time_scale_s: float) -> str:
+    """An amplifier's element values; an integrator's mode when it is selected by a cord or is not
+    the machine's time scale (a GP-6's one mode goes without saying: the header says it)."""
     parts = []
+    if a.mode is not None and (a.mode.jumper or a.mode.k0_per_s * time_scale_s != 1.0):
+        parts.append(f"{_mode_words(a.mode.name, a.mode.jumper or '')}: k0 {a.mode.k0_per_s:g} 1/s")
     if a.ic_V is not None:
         parts.append(f"IC {a.ic_V:g} V")
     if a.T_d_s is not None:

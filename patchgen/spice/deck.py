@@ -176,7 +176,8 @@ def _amplifier(d: DeckLines, net: Netlist, reading: Reading, amp: Amplifier, mac
     rms = levels.amplifier_V_rms
     fb = f"{n}_fb" if rms > 0 else out  # feedback is taken before an output-noise source
     cap = _feedback_capacitor(stage, machine)
-    offset, bias = _drift_sources(stage, machine, cap, levels.drift_V_per_s)
+    rate = levels.drift_at(1.0 / stage.T_s if stage.role == "integrator" else None, machine)
+    offset, bias = _drift_sources(stage, machine, cap, rate)
     plus = f"{n}_plus" if offset else "0"
     d.comment(f"{amp.id}: {amp.role}, carries {amp.carries.polarity:+d} x {amp.carries.volts_per_unit} "
               f"V/unit x {amp.carries.quantity}")

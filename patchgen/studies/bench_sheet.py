@@ -71,11 +71,20 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
             f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; random "
             f"forces {dist.cart_force_N_rms:g} N rms on the cart and {dist.tip_force_N_rms:g} "
             f"N rms at the tip (to {dist.bandwidth_Hz:g} Hz); drift "
-            f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s ({machine.imperfections.drift_source}); "
+            f"{_drift_text(net, machine)} ({machine.imperfections.drift_source}); "
             f"rails +/-{machine.imperfections.saturation_V:g} V; switches at +/-{d.spec.plant.d / 2:g} m. "
             + diagnosis_note(net, plant, bench) + (" " + ranges_note(corners) if spread else ""))
     return SheetSection("Predicted on the bench", header, rows, note,
                         banner=failure_banner(bench.id, diagnose(net, plant, bench)[-1], preds))
+
+
+def _drift_text(net, machine) -> str:
+    """The integrators' drift rate, one per integrator mode the patch uses when it uses more than
+    the machine's one (a faster mode drifts faster)."""
+    modes = sorted({(a.mode.k0_per_s, a.mode.name) for a in net.amplifiers if a.mode is not None})
+    if len(machine.integrator_modes) == 1 or not modes:
+        return f"{1000 * machine.integrator_drift_V_per_s():.1f} mV/s"
+    return ", ".join(f"{1000 * machine.integrator_drift_V_per_s(1.0 / k0):.1f} mV/s in {name}" for k0, name in modes)
 
 
 def bench_named(bench: BenchProfile) -> str:

@@ -91,6 +91,7 @@ def scenario_cases() -> list[Case]:
 # ---- machine and bench profiles, given by path in a spec -------------------------------------
 
 GP6 = shipped("profiles/machines", "gp6")
+THAT = shipped("profiles/machines", "the-analog-thing")
 UW = shipped("profiles/benches", "uw-1991")
 MP, BP = "@TMP@/m.toml", "@TMP@/b.toml"
 WITH_M = dumps(with_field(LAG, "machine", MP))
@@ -138,6 +139,13 @@ BENCH_FIELDS = {
 }
 
 
+def _modes(edit) -> dict:
+    """THE ANALOG THING's profile with its integrator modes edited."""
+    out = copy.deepcopy(THAT)
+    edit(out["integrator_modes"])
+    return out
+
+
 def _amps(edit) -> dict:
     out = copy.deepcopy(GP6)
     edit(out["amplifiers"])
@@ -182,6 +190,16 @@ def profile_cases() -> list[Case]:
         "step-when-unknown": (_steps("checklist", 3, when="sometimes"), "procedure.checklist[3].when"),
         "step-unknown-key": (_steps("operation", 2, colour="red"), "procedure.operation[2].colour"),
         "step-not-table": (with_field(GP6, "procedure.operation", ["Patch it."]), "procedure.operation[0]"),
+        "modes-and-time-scale": (with_field(THAT, "time_scale_s", 0.1), "time_scale_s"),
+        "modes-empty": (with_field(THAT, "integrator_modes", []), "time_scale_s"),
+        "mode-k0-zero": (_modes(lambda m: m[0].update(k0_per_s=0.0)), "integrator_modes[0].k0_per_s"),
+        "mode-k0-string": (_modes(lambda m: m[1].update(k0_per_s="fast")), "integrator_modes[1].k0_per_s"),
+        "mode-k0-nan": (_modes(lambda m: m[1].update(k0_per_s=math.nan)), "integrator_modes[1].k0_per_s"),
+        "mode-k0-missing": (_modes(lambda m: m[0].pop("k0_per_s")), "integrator_modes[0].k0_per_s"),
+        "mode-name-twice": (_modes(lambda m: m[1].update(name="SLOW")), "integrator_modes[1].name"),
+        "mode-no-jumpers": (_modes(lambda m: m[0].pop("jumper")), "integrator_modes"),
+        "mode-jumper-empty": (_modes(lambda m: m[0].update(jumper="")), "integrator_modes[0].jumper"),
+        "mode-unknown-key": (_modes(lambda m: m[0].update(colour="red")), "integrator_modes[0].colour"),
     }
     out += [machine_case(k, data, f) for k, (data, f) in shapes.items()]
     out += field_cases("", UW, BENCH_FIELDS, bench_case)

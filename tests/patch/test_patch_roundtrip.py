@@ -12,7 +12,7 @@ from patchgen.design.lqg import design, design_on
 from patchgen.inputs.errors import ResourceError
 from patchgen.inputs.spec import DesignSpec, check_spec
 from patchgen.patch.build import build_patch
-from patchgen.patch.netlist import Netlist
+from patchgen.patch.netlist import SCHEMA_ID, Netlist
 from patchgen.patch.readback import wired_law
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
@@ -121,7 +121,7 @@ def test_random_designs_patch_within_pot_range_and_roundtrip(spec):
         assert "exceeds 10" in exc.line() or "needs" in exc.line()
         return
     assert all(0 <= p.setting <= 1 for p in net.pots)
-    assert json.loads(net.to_json())["schema"] == "patchgen.netlist/2"
+    assert json.loads(net.to_json())["schema"] == SCHEMA_ID
     check_roundtrip(d, net, m.pot_resolution)
 
 

@@ -161,23 +161,42 @@ def test_a_hand_built_ring_names_its_amplifiers():
     read(_hand_built(extra_s2_input="I1"))  # through the integrator: no algebraic loop
 
 
-def test_engine_and_deck_take_the_integrators_time_scale_from_the_reading():
-    """A netlist scaled for a 2 s integrator: the simulator integrates at 1/2 per second and the
-    deck's feedback capacitor is 2 s over the x1 input resistor, not the profile's 1 uF; drift
-    at the profile's rate through that capacitor takes twice the profile's offset and bias."""
+def _two_second_integrator(data) -> None:
+    _amp(data, "A1")["mode"] = {"name": "standard", "k0_per_s": 0.5, "jumper": None}
+
+
+def _schema_2(data) -> None:
+    """The netlist as schema 2 wrote it: no mode, the integrators at the netlist's time scale."""
+    data["schema"] = "patchgen.netlist/2"
+    data["time_scale_s"] = 2.0
+    for a in data["amplifiers"]:
+        a.pop("mode", None)
+
+
+@pytest.mark.parametrize("edit", [_two_second_integrator, _schema_2], ids=["mode", "schema-2"])
+def test_engine_and_deck_take_the_integrators_time_scale_from_the_reading(edit):
+    """An integrator at k0 = 0.5 1/s (its mode, or a schema-2 netlist's time scale): the simulator
+    integrates at 1/2 per second and the deck's feedback capacitor is 2 s over the x1 input
+    resistor, not the profile's 1 uF; the drift, e_os/(R C) + i_b/C, is half the profile's 5 mV/s
+    through that capacitor (the profile's own offset and bias), in the simulator and the deck alike."""
+    from patchgen.bench.configure import engine_config
     from patchgen.bench.noise_drift import noise_and_drift
     from patchgen.inputs.scenario import Scenario
 
-    net, gp6, uw = _net(lambda d: d.update(time_scale_s=2.0)), load_machine("gp6"), load_bench("uw-1991")
+    net, gp6, uw = _net(edit), load_machine("gp6"), load_bench("uw-1991")
     assert read(net).amplifiers["A1"].T_s == 2.0
     c = compile_circuit(net, gp6, uw)
     assert c.param1[c.amp_ids.index("A1")] == 0.5
-    levels = noise_and_drift(["s", "theta", "s_dot"], uw, gp6, Scenario(duration_s=1.0, noise="off"))
+    scenario = Scenario(duration_s=1.0, noise="off")
+    levels = noise_and_drift(["s", "theta", "s_dot"], uw, gp6, scenario)
+    assert levels.drift_V_per_s == pytest.approx(0.005, rel=1e-12)
     plant = PlantParams(M=3.552, m=0.324, l=0.429, g=9.807, b_VF=2.5775, c=0.001, d=1.090)
+    drift = engine_config(c, plant, uw, gp6, scenario)[0].wiring.drift
+    assert drift[c.amp_ids.index("A1")] == pytest.approx(0.0025, rel=1e-12)
     deck = spice_deck(net, plant, uw, gp6, SpiceSettings(1.0, 0.01, (0, 0.1, 0, 0), noise_and_drift=levels)).text
     assert gp6.components.integrator_capacitor_F == 1e-6 and gp6.components.input_resistor_x1_ohm == 1e6
     assert "C_a1_f a1_sj a1_out 2e-06" in deck
-    assert "V_a1_offset a1_plus 0 DC 0.004" in deck and "I_a1_bias a1_sj 0 DC 6e-09" in deck
+    assert "V_a1_offset a1_plus 0 DC 0.002" in deck and "I_a1_bias a1_sj 0 DC 3e-09" in deck
 
 
 def test_stage_levels_put_states_first_and_feed_through_after_its_latest_source():

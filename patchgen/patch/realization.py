@@ -90,7 +90,8 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
     if e == "kalman":
         return _kalman(design, machine, ks, KU, T)
     if e == "reduced_observer":
-        return _reduced_observer(design, ks, KU, T, max(machine.input_weights) * machine.pot_max)
+        return _reduced_observer(design, ks, KU, T, max(machine.input_weights) * machine.pot_max,
+                                 integrator_reach(machine))
     if "theta_dot" in states:
         if e == "none":
             raise spec.error("estimator.kind", "theta_dot is not measured on the bench: choose "
@@ -114,10 +115,19 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
                              "Kalman estimator")
         blocks.append(lag_block("actuator", (Term("u_c", 1.0),), scale["actuator"], "N",
                                 "actuator state from a first-order lag model driven by u_c", tau, T,
-                                max(machine.input_weights) * machine.pot_max))
+                                integrator_reach(machine)))
     terms = tuple(Term(s, -float(design.K[0, i]) / (scale[s] * KU)) for i, s in enumerate(states))
     blocks.append(Block("u_c", "sum", terms, 1.0, "V", "control voltage to the servo amplifier"))
     return Realization(spec.name, ks, tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
+
+
+def integrator_reach(machine: MachineProfile) -> float:
+    """The largest coefficient, at the machine's time scale, an integrator carries on one input on
+    some mode: the top gain on the fastest mode, scaled back to the slowest (patchgen.patch.time_scales
+    moves a block there). The top gain itself on a machine with one mode."""
+    top = max(machine.input_weights) * machine.pot_max
+    fastest = max(m.k0_per_s for m in machine.integrator_modes)
+    return top if len(machine.integrator_modes) == 1 else top * fastest * machine.time_scale_s
 
 
 def lag_block(name: str, terms: tuple[Term, ...], volts_per_unit: float, unit: str, purpose: str, tau: float,
@@ -127,7 +137,7 @@ def lag_block(name: str, terms: tuple[Term, ...], volts_per_unit: float, unit: s
     As an integrator with its own output fed back through a pot: dv/dt = (1/T) (sum (T/tau) c_j v_j
     - (T/tau) v), so the time constant is a dial setting (T/tau on a weighted input) and no external
     part is needed. That takes every coefficient times T/tau within ``top`` (the largest weighted
-    input); otherwise the block stays a lag (a summer with an external capacitor tau/R_f across its
+    input, on the fastest integrator mode: :func:`integrator_reach`); otherwise the block stays a lag (a summer with an external capacitor tau/R_f across its
     feedback resistor, patchgen.patch.parts).
     """
     k = T / tau
@@ -185,7 +195,7 @@ def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
 
 
 def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
-                      top: float) -> Realization:
+                      top: float, reach: float) -> Realization:
     """Reduced observer (patchgen.design.observer) on lag amplifiers: z_i' = -p z_i + sum F_ij z_j + G_i y
     + H_i u, each a lag of time constant 1/p (its own feedback needs no pot).
 
@@ -219,7 +229,7 @@ def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
             terms.append(Term("u_c", _exact(tau * obs.H[i] * alpha[s] * KU, top)))
         blocks.append(lag_block(f"z_{s}", tuple(terms), alpha[s], STATE_UNITS[s],
                                 f"reduced observer: {s} estimate minus its sensor part (pole {obs.pole:g} rad/s)",
-                                tau, T, top))
+                                tau, T, reach))
     scale = {f"z_{s}": alpha[s] for s in w}
     ints, int_scale, notes = _integral_blocks(design, ks, T)
     blocks += ints

@@ -142,3 +142,24 @@ def test_no_mode_fast_enough_is_one_line_naming_the_rate():
     line = exc.value.line()
     assert "\n" not in line
     assert "an integrator rate of 1 1/s" in line and "k0 0.001 1/s, reaches 0.01 1/s" in line
+
+
+def test_a_lag_too_fast_for_slow_is_an_integrator_on_the_standard_mode(tmp_path):
+    """A 5 ms actuator model: on the GP-6 (1 s) its feedback pot would need 200, so it is a summer
+    with an external capacitor; on THE ANALOG THING the standard 1000 1/s mode carries it as an
+    integrator with its output fed back through a pot at 0.2 (1/(k0 tau)), no external part."""
+    text = (design_path("bench-recommended")).read_text().replace("tau = 0.2 ", "tau = 0.005 ")
+    spec = tmp_path / "fast-lag.toml"
+    spec.write_text(text)
+    d, gp6 = design_from_path(spec)
+    assert d.spec.actuator.tau == 0.005
+    on_gp6 = build_patch(d, gp6)
+    assert next(a for a in on_gp6.amplifiers if a.carries.quantity == "actuator").role == "lag"
+    assert any(p.kind == "capacitor" for p in on_gp6.parts)
+    net = build_patch(d, THAT)
+    a = next(a for a in net.amplifiers if a.carries.quantity == "actuator")
+    assert a.role == "integrator" and a.mode == Mode(name="standard", k0_per_s=1000.0, jumper=None)
+    own = next(p for p in net.pots if p.amplifier == a.id and p.source == a.id)
+    assert own.weight * own.setting == pytest.approx(1 / (1000.0 * 0.005), abs=THAT.pot_resolution / 2)
+    assert not any(p.amplifier == a.id for p in net.parts)
+    check_roundtrip(d, net, THAT.pot_resolution)

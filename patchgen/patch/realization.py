@@ -137,8 +137,9 @@ def lag_block(name: str, terms: tuple[Term, ...], volts_per_unit: float, unit: s
     As an integrator with its own output fed back through a pot: dv/dt = (1/T) (sum (T/tau) c_j v_j
     - (T/tau) v), so the time constant is a dial setting (T/tau on a weighted input) and no external
     part is needed. That takes every coefficient times T/tau within ``top`` (the largest weighted
-    input, on the fastest integrator mode: :func:`integrator_reach`); otherwise the block stays a lag (a summer with an external capacitor tau/R_f across its
-    feedback resistor, patchgen.patch.parts).
+    input, on the fastest integrator mode: :func:`integrator_reach`); otherwise the block stays a
+    lag (a summer with an external capacitor tau/R_f across its feedback resistor,
+    patchgen.patch.parts).
     """
     k = T / tau
     if k <= top and all(abs(t.coeff) * k <= top for t in terms):

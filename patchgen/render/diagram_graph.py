@@ -219,5 +219,7 @@ def _amplifier(net: Netlist, a: Amplifier, local) -> Block:
         feedback = (_part_mark(across[0]) if across
                     else PartMark("C", f"τ {a.tau_s:.3g} s" if a.tau_s else "τ"))
     ic = ("IC" if a.ic_V is None else f"IC {a.ic_V:g} V") if a.role == "integrator" else ""
+    if ic and a.mode is not None and a.mode.jumper:  # the mode's cord, as the wire list has it
+        ic += f", {a.mode.jumper}"
     return Block(a.id, a.role, tuple(feeds), signed_label(a.carries.polarity, a.carries.quantity),
                  ic, feedback, name=a.id)

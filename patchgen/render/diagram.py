@@ -182,7 +182,7 @@ class _Painter:
         yc, xa = geo.row_y[p.row], geo.amp_x[b.id]
         sh = geo.shapes[b.id]
         pins = [(p.offset(j) * geo.pitch, b.feeds[j].weight) for j in range(len(b.feeds))]
-        self.d.add(AmplifierSymbol(b.name, b.role, pins, geo.pitch).at((xa, yc)))
+        self.d.add(AmplifierSymbol(b.name, b.role, pins, geo.pitch, b.mark).at((xa, yc)))
         x_out = xa + sh.width
         self.wire(b.id, (x_out, yc), (geo.stage_right[p.stage], yc))
         lines = lead_lines(b.label)

@@ -213,7 +213,7 @@ def measure(layout: Layout) -> Geometry:
 
 def _amp_shape(b: Block, pitch: float, pot_r: float) -> Shape:
     """An amplifier's symbol size, and the room it and its pins' labels take above and below."""
-    half, box, width = amp_shape(b.role, b.name, [f.weight for f in b.feeds], pitch)
+    half, box, width = amp_shape(b.role, b.name, [f.weight for f in b.feeds], pitch, b.mark)
     top_pin = (len(b.feeds) - 1) / 2 * pitch
     up = down = half
     if any(f.pot for f in b.feeds):

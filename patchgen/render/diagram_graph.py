@@ -48,6 +48,7 @@ class Block:
     ic: str = ""                          # an integrator's initial condition
     feedback: PartMark | None = None      # a lag's capacitor across its feedback
     name: str = ""                        # an amplifier's id or a terminal's name, as written
+    mark: str = ""                        # written under the id: d/dt, or the cord that sets a mode (SLOW)
     details: tuple[str, ...] = ()
 
     @property
@@ -219,7 +220,6 @@ def _amplifier(net: Netlist, a: Amplifier, local) -> Block:
         feedback = (_part_mark(across[0]) if across
                     else PartMark("C", f"τ {a.tau_s:.3g} s" if a.tau_s else "τ"))
     ic = ("IC" if a.ic_V is None else f"IC {a.ic_V:g} V") if a.role == "integrator" else ""
-    if ic and a.mode is not None and a.mode.jumper:  # the mode's cord, as the wire list has it
-        ic += f", {a.mode.jumper}"
+    mark = "d/dt" if a.role == "differentiator" else (a.mode.jumper if a.mode is not None and a.mode.jumper else "")
     return Block(a.id, a.role, tuple(feeds), signed_label(a.carries.polarity, a.carries.quantity),
-                 ic, feedback, name=a.id)
+                 ic, feedback, name=a.id, mark=mark)

@@ -156,11 +156,13 @@ def weight_width(weights: list[int]) -> float:
     return max((text_width(str(w), SMALL_PT) for w in weights), default=0.0)
 
 
-def amp_shape(role: str, amp_id: str, weights: list[int], pitch: float) -> tuple[float, float, float]:
+def amp_shape(role: str, amp_id: str, weights: list[int], pitch: float,
+              mark: str = "") -> tuple[float, float, float]:
     """(half height, input box width, total width) of an amplifier symbol.
 
     The triangle is made long enough that every inscription (the weights beside the inputs, the
-    id, ``d/dt`` for a differentiator) lies inside it with a margin, and tall enough that it need
+    id, a ``mark`` under it: ``d/dt`` for a differentiator, ``SLOW`` for an integrator set by that
+    cord) lies inside it with a margin, and tall enough that it need
     not be much longer than high; an integrator writes its weights in its input rectangle.
     """
     n = max(len(weights), 1)
@@ -172,8 +174,8 @@ def amp_shape(role: str, amp_id: str, weights: list[int], pitch: float) -> tuple
         inside.append((x + ww, (n - 1) * pitch / 2 + text_height(SMALL_PT) / 2))
         x += ww + GAP
     idw = text_width(amp_id, ID_PT)
-    if role == "differentiator":
-        inside.append((x + max(idw, text_width("d/dt", SMALL_PT)), text_height(ID_PT) + GAP))
+    if mark:
+        inside.append((x + max(idw, text_width(mark, SMALL_PT)), text_height(ID_PT) + GAP))
     else:
         inside.append((x + idw, text_height(ID_PT) / 2))
     half = max(0.62, (n - 1) * pitch / 2 + PIN_MARGIN)
@@ -203,13 +205,15 @@ class AmplifierSymbol(Element):
     """Inverting amplifier in analog-computer notation, drawn from its input side at x = 0.
 
     ``pins`` are the input heights (relative to the centre) with their weights. An integrator has
-    a rectangle on its input side holding the weights; a differentiator is marked ``d/dt``.
+    a rectangle on its input side holding the weights; ``mark`` is written under the id (a
+    differentiator's ``d/dt``, the cord that sets an integrator's mode).
     """
 
-    def __init__(self, amp_id: str, role: str, pins: list[tuple[float, int]], pitch: float, **kwargs):
+    def __init__(self, amp_id: str, role: str, pins: list[tuple[float, int]], pitch: float, mark: str = "",
+                 **kwargs):
         super().__init__(**kwargs)
         weights = [w for _, w in pins]
-        half, box, width = amp_shape(role, amp_id, weights, pitch)
+        half, box, width = amp_shape(role, amp_id, weights, pitch, mark)
         self.segments.append(SegmentPoly([(box, half), (width, 0.0), (box, -half)], lw=SYMBOL_LW,
                                          fill="white"))
         if box:
@@ -219,11 +223,10 @@ class AmplifierSymbol(Element):
             self.segments.append(_text((GAP, centred_baseline(y, SMALL_PT)), str(w), SMALL_PT, "left"))
         x = box + GAP + (0.0 if box else weight_width(weights) + GAP)
         cx = x + text_width(amp_id, ID_PT) / 2
-        if role == "differentiator":
-            cx = x + max(text_width(amp_id, ID_PT), text_width("d/dt", SMALL_PT)) / 2
+        if mark:
+            cx = x + max(text_width(amp_id, ID_PT), text_width(mark, SMALL_PT)) / 2
             self.segments.append(_text((cx, GAP / 2 + DESCENT * ID_PT * PT), amp_id, ID_PT, "center"))
-            self.segments.append(_text((cx, -GAP / 2 - ASCENT * SMALL_PT * PT), "d/dt", SMALL_PT,
-                                       "center"))
+            self.segments.append(_text((cx, -GAP / 2 - ASCENT * SMALL_PT * PT), mark, SMALL_PT, "center"))
         else:
             self.segments.append(_text((cx, centred_baseline(0.0, ID_PT)), amp_id, ID_PT, "center"))
         self.anchors["out"] = (width, 0)

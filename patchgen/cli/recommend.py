@@ -25,6 +25,7 @@ from patchgen.studies.comparison import (
     table_rows,
     verdict_text,
 )
+from patchgen.studies.departures import grouped
 from patchgen.studies.recommend import RUNS, recommend
 
 from . import cli
@@ -55,9 +56,12 @@ def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_nam
     """Run every realisation of SPEC on the bench in every scenario; write the best patch and its spec.
 
     The realisations: every estimator, and each again designed with the bench's actuator when
-    SPEC's design model differs. The best is written with recommended.toml (its spec, which every
-    command takes) and the comparison. Exit 1, with the comparison written, when no realisation
-    with a wired loop stable on the bench holds in 95 % of the runs of every scenario.
+    SPEC's design model differs. When none holds, SPEC's variants too, nearest first: an integral
+    state the force cannot move dropped, coefficients below the dial left out, theta weighted
+    harder. The best is written with recommended.toml (its spec, which every command takes; each
+    field it changes of SPEC named with why) and the comparison. Exit 1, with the comparison
+    written, when no realisation with a wired loop stable on the bench holds in 95 % of the runs
+    of every scenario, variants included.
     """
     check_out_dir(out_dir, RECOMMEND_FILES, force)
     sp, machine, bench = load_inputs(spec, bench_name)
@@ -83,6 +87,10 @@ def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_nam
             for n in best.netlist.notes:
                 console.print(f"[yellow]note:[/yellow] {n}")
         console.print(("[bold]" if best else "[bold red]") + escape(verdict_text(rec)) + "[/]")
+        if best is not None and best.departures:
+            console.print(f"[bold yellow]departs from {escape(sp.name)}:[/bold yellow]")
+            for line in grouped(best.departures):
+                console.print(f"  {escape(line)}")
         console.print("wrote " + ", ".join(str(p) for p in written))
     if best is None:
         sys.exit(NONE_CHOSEN_STATUS)

@@ -12,6 +12,7 @@ from patchgen.inputs.scenario import Scenario
 from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.netlist import Netlist
 from patchgen.studies.bench_corners import BenchStudy
+from patchgen.studies.departures import Departure
 from patchgen.studies.ranking import DECISIONS, TARGET, ScenarioOutcome, decision, weakest
 
 # Figures are rounded before ranking, so that noise in the last digits cannot reorder candidates.
@@ -39,6 +40,8 @@ class Candidate:
     robust_note: str = ""  # how a corner-robust candidate was chosen
     searched: tuple[BenchStudy, ...] = field(default=(), compare=False, repr=False)  # the robust search's
     # corner studies of this very patch (robust.SEARCH_RUNS seeds each), every scenario
+    variant: str = ""  # the spec's variant it realises (patchgen.studies.variants); "": the spec itself
+    departures: tuple[Departure, ...] = ()  # every field its written spec changes of the spec given
 
     @property
     def simulated(self) -> bool:
@@ -138,6 +141,9 @@ class Recommendation:
     ranked: tuple[Candidate, ...]
     ranges: dict[str, tuple[float, float]] = field(default_factory=dict)  # the bench's, drawn by every run
     distribution: str = "uniform"
+    variants: tuple[str, ...] = ()  # the spec's variants tried, nearest first (none held among its own)
+    repeated: int = 0  # variants' realisations left out: their patch was one already run
+    unfit: int = 0  # variants' realisations left out: they did not design or fit the machine
 
     @property
     def best(self) -> Candidate | None:

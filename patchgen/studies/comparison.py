@@ -14,6 +14,7 @@ from patchgen.profiles.machine import MachineProfile
 from patchgen.render.sheet import SheetSection
 from patchgen.studies.bench_sheet import predicted_patch_files
 from patchgen.studies.candidate import Candidate, Recommendation
+from patchgen.studies.departures import grouped, value_text
 from patchgen.studies.ranking import ROUND_RUNS, TARGET
 from patchgen.studies.recommend import CORNER_RUNS, chosen_spec
 from patchgen.studies.robust import ALTERNATIVES, WHY_GAINS
@@ -51,6 +52,8 @@ def table_rows(rec: Recommendation) -> list[dict]:
             "worst_corner": None if st is None or st.worst_corner is None else st.worst_corner.as_dict(),
             "weakest_parameter": None if st is None or st.weakest_parameter is None else st.weakest_parameter.as_dict(),
             "robust": c.robust_note or None,
+            "variant": c.variant or None,
+            "departures": [d.as_dict() for d in c.departures],
         })
     return rows
 
@@ -118,7 +121,20 @@ def method_text(rec: Recommendation) -> str:
             f"that is not stable on the bench (linearised with its actuator lag and pots as dialled) ranks below every "
             f"stable one and is never chosen; then by holds / undecided / fails, the weakest held fraction (when not "
             f"clearly holding), the wired loop's gain margin on the bench (nearer limit), its phase margin, then "
-            f"hardware (units, amplifiers, pots)." + _ranges_text(rec))
+            f"hardware (units, amplifiers, pots)." + _ranges_text(rec) + _variants_text(rec))
+
+
+def _variants_text(rec: Recommendation) -> str:
+    """Which of the spec's variants were tried, and why ("" when its own realisations sufficed)."""
+    if not rec.variants:
+        return ""
+    left = [f"{n} gave a patch already run" for n in (rec.repeated,) if n]
+    left += [f"{n} did not design or fit the machine" for n in (rec.unfit,) if n]
+    return (" None of the spec's own realisations held, so its variants were tried, nearest first, each with "
+            "every realisation above, stopping after the first tier in which one held: "
+            + "; ".join(rec.variants) + ". A variant's realisation is named after its changes, and every field "
+            "it changes of the spec is listed with why (its departures)."
+            + (" Of the variants' realisations, " + " and ".join(left) + "; those are not listed." if left else ""))
 
 
 def _ranges_text(rec: Recommendation) -> str:
@@ -139,18 +155,50 @@ def verdict_text(rec: Recommendation) -> str:
     best = rec.best
     if best is not None:
         w = best.weakest
+        departs = (f" It departs from {rec.spec.name} in " + ", ".join(d.field for d in best.departures) + "."
+                   if best.departures else "")
         return (f"Chosen: {best.label}: wired loop stable on the bench, held in {w.fraction:.1%} of the runs of its "
-                f"weakest scenario ({w.scenario}, {w.held} of {w.runs}).")
+                f"weakest scenario ({w.scenario}, {w.held} of {w.runs}).{departs}")
+    n = len(rec.variants)
+    tried = "" if not n else " (nor in its one variant tried)" if n == 1 else f" (nor in any of the {n} variants tried)"
     stable = [c for c in rec.ranked if c.simulated and c.bench_loop == "stable"]
     if not stable:
-        return ("None chosen: no realisation that fits the machine has a wired loop stable on the bench ("
-                + "; ".join(f"{c.label}: {c.bench_loop}" for c in rec.ranked if c.simulated)
+        return (f"None chosen: no realisation that fits the machine has a wired loop stable on the bench{tried} ("
+                + "; ".join(f"{c.label}: {c.bench_loop}" for c in rec.ranked if c.simulated and not c.variant)
                 + "). Design with the bench's actuator and weights that answer its dead zone, as the shipped "
                 "design bench-recommended does.")
     b = stable[0]
     w = b.weakest
-    return (f"None chosen: the best realisation with a loop stable on the bench, {b.label}, held in only "
+    corner = b.corner_fraction
+    if corner is not None and corner < TARGET <= w.fraction:  # held on the nominal runs, not at a corner
+        return (f"None chosen: the best realisation with a loop stable on the bench{tried}, {b.label}, held in only "
+                f"{corner:.1%} of the runs at the worst corner of the bench's ranges (at least {TARGET:.0%} at every "
+                "corner is needed).")
+    return (f"None chosen: the best realisation with a loop stable on the bench{tried}, {b.label}, held in only "
             f"{w.fraction:.1%} of the runs of {w.scenario} (at least {TARGET:.0%} of every scenario is needed).")
+
+
+def departures_section(rec: Recommendation) -> SheetSection | None:
+    """The chosen patch's departures from the spec, for the sheet, with a banner at its top (None
+    when it departs in nothing)."""
+    b = rec.best
+    if b is None or not b.departures:
+        return None
+    rows = [[d.field, value_text(d.was), value_text(d.now), d.why] for d in b.departures]
+    return SheetSection("Departures from the spec", ["field", rec.spec.name, "this patch", "why"], rows,
+                        f"Every field of recommended.toml that differs from {rec.spec.path}, and why.",
+                        banner=f"Not {rec.spec.name} as written: this patch departs from it in {len(rows)} "
+                               f"field{'s' * (len(rows) > 1)}; see 'Departures from the spec'.")
+
+
+def departures_markdown(rec: Recommendation) -> str:
+    """The chosen patch's departures as a Markdown table ("" when there are none)."""
+    sec = departures_section(rec)
+    if sec is None:
+        return ""
+    rows = ("| " + " | ".join(x.replace("|", "\\|") for x in row) + " |\n" for row in sec.rows)
+    return (f"\n## {sec.title}\n\n{sec.note}\n\n| " + " | ".join(sec.header) + " |\n|---|---|---|---|\n"
+            + "".join(rows))
 
 
 def table_markdown(rec: Recommendation, reference_V: float) -> str:
@@ -251,18 +299,23 @@ def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: Be
     best = rec.best
     files: dict[str, str] = {}
     if best is not None:
-        files.update(predicted_patch_files(best.design, machine, bench, best.netlist,
-                                           [why_section(rec, machine.reference_V)], done=_reusable_runs(rec, best),
-                                           corners=best.bench_study))
+        sections = [s for s in (departures_section(rec), why_section(rec, machine.reference_V)) if s is not None]
+        files.update(predicted_patch_files(best.design, machine, bench, best.netlist, sections,
+                                           done=_reusable_runs(rec, best), corners=best.bench_study))
+        departs = "".join(f"\n  {line}" for line in grouped(best.departures))
         files[RECOMMENDED_SPEC] = spec_toml(chosen_spec(rec), (
             f"{rec.spec.name}, as patchgen recommend chose it on the {bench.id} bench: {best.label}.\n"
-            "Every patchgen command takes this file; see recommendation.md for why."))
-    files["recommendation.md"] = f"# Why this patch\n\n{table_markdown(rec, machine.reference_V)}"
+            "Every patchgen command takes this file; see recommendation.md for why."
+            + (f"\nIt departs from {rec.spec.name} in:{departs}" if departs else "")))
+    files["recommendation.md"] = (f"# Why this patch\n\n{table_markdown(rec, machine.reference_V)}"
+                                  + departures_markdown(rec))
     files["recommendation.json"] = json.dumps({
         "spec": rec.spec.name, "bench": bench.id, "machine": machine.id,
         "scenarios": [{"name": sc.name, "seed": rec.seed_of(sc)} for sc in rec.scenarios],
         "max_runs": rec.max_runs, "target": TARGET, "chosen": None if best is None else best.label,
         "bench_ranges": {k: list(v) for k, v in rec.ranges.items()}, "bench_distribution": rec.distribution,
         "corner_runs": CORNER_RUNS if rec.ranges else None, "robust": robust_text(rec) or None,
-        "verdict": verdict_text(rec), "candidates": table_rows(rec)}, indent=2, sort_keys=True, allow_nan=False) + "\n"
+        "verdict": verdict_text(rec), "variants": list(rec.variants),
+        "departures": [] if best is None else [d.as_dict() for d in best.departures],
+        "candidates": table_rows(rec)}, indent=2, sort_keys=True, allow_nan=False) + "\n"
     return files

@@ -27,6 +27,10 @@ also run at every corner of the ranges and at each end of each range in its weak
 weakest parameter; the worst corner's held fraction ranks right after the verdict, and a candidate is chosen only if it
 held in at least TARGET of the runs at every corner. The candidates then include one whose gains
 are chosen over the corners (patchgen.studies.robust, added by ``extra_candidates``).
+
+When none of these is chosen, the spec's variants are tried (patchgen.studies.variants), each with
+every candidate above, a tier at a time, nearest first, until one is chosen. Every candidate carries
+its departures from the spec (patchgen.studies.departures), so the one chosen names them.
 """
 
 from __future__ import annotations
@@ -44,10 +48,11 @@ from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.build import build_patch
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
-from patchgen.studies import robust
+from patchgen.studies import robust, variants
 from patchgen.studies.bench_corners import study
 from patchgen.studies.candidate import Candidate, Recommendation
 from patchgen.studies.compensator_candidates import compensator_specs
+from patchgen.studies.departures import departures, realisation_whys, settled_spec
 from patchgen.studies.ranking import ROUND_RUNS, ScenarioOutcome, decision, outcome
 
 CANDIDATES = (
@@ -236,7 +241,8 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
 def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenarios: Sequence[Scenario],
               runs: int = RUNS, seed: int | None = None, early_stop: bool = True,
               progress: Callable[[str, int, int], None] | None = None) -> Recommendation:
-    """Design, allocate and simulate every candidate on every scenario, and rank them.
+    """Design, allocate and simulate every candidate on every scenario, and rank them; when none
+    holds, the spec's variants too (patchgen.studies.variants), nearest first, until one does.
 
     Parameters
     ----------
@@ -254,52 +260,109 @@ def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, sc
         End a candidate's Monte Carlo once it clearly holds or clearly fails.
     progress : callable, optional
         Called as ``progress(label, done, total)``: the candidate being simulated, the runs done
-        and the most runs there can be over every candidate that fits (it may finish early).
+        and the most runs there can be over every candidate that fits so far (it may finish early;
+        a tier of variants adds its own).
 
     Returns
     -------
     Recommendation
-        The candidates ranked best first (see the module docstring).
+        The candidates ranked best first (see the module docstring), each with its departures
+        from ``spec``.
     """
-    cands = prepare(spec, machine, bench) + extra_candidates(spec, machine, bench, scenarios, seed)
-    per = runs * len(scenarios)
-    total = per * sum(c.netlist is not None for c in cands)
-    done, base = [], 0
-    for c in cands:
-        if c.netlist is None:
-            done.append(c)
-            continue
-        cb = (lambda n, lab=c.label, b=base: progress(lab, b + n, total)) if progress else None
-        done.append(evaluate(c, bench, machine, scenarios, runs, seed, early_stop, cb))
-        base += per
-        if progress is not None:
-            progress(c.label, base, total)
+    robust_why = {"weights": f"{robust.LABEL}: {robust.WHY_GAINS}", "integrators.int_s": robust.LABEL}
+    cands = [departed(c, spec, bench) for c in prepare(spec, machine, bench)]
+    cands += [departed(c, spec, bench, robust_why) for c in extra_candidates(spec, machine, bench, scenarios, seed)]
+    run = _Runner(bench, machine, scenarios, runs, seed, early_stop, progress)
+    done = run(cands)
+    rec = _ranked(spec, scenarios, runs, seed, done, bench)
+    if rec.best is not None:
+        return rec
+    below = any(variants.below_dial(c.design, machine) for c in done if c.netlist is not None)
+    seen = {_patch_key(c.netlist) for c in done if c.netlist is not None}
+    tried, repeated, unfit = [], 0, 0
+    for tier in variants.tiers(spec, machine, bench, below):
+        fresh, r, u = _tier_candidates(tier, spec, machine, bench, seen)
+        tried, repeated, unfit = tried + [v.name for v in tier], repeated + r, unfit + u
+        done += run(fresh)
+        rec = _ranked(spec, scenarios, runs, seed, done, bench, tuple(tried), repeated, unfit)
+        if rec.best is not None:
+            break
+    return rec
+
+
+def _tier_candidates(tier: list[variants.Variant], spec: DesignSpec, machine: MachineProfile, bench: BenchProfile,
+                     seen: set[str]) -> tuple[list[Candidate], int, int]:
+    """Every candidate of a tier's variants whose patch is not in ``seen`` (which it joins), named
+    after its variant and with its departures; and how many gave a patch already run, or none."""
+    fresh, repeated, unfit = [], 0, 0
+    for v in tier:
+        for c in prepare(v.spec, machine, bench):
+            key = None if c.netlist is None else _patch_key(c.netlist)
+            repeated += key in seen
+            unfit += key is None
+            if key is not None and key not in seen:
+                seen.add(key)
+                fresh.append(departed(replace(c, label=f"{c.label}; {v.name}", variant=v.name), spec, bench, v.whys))
+    return fresh, repeated, unfit
+
+
+class _Runner:
+    """Simulates candidates in order, reporting progress over every candidate run so far (a
+    call's candidates add their most runs to the total)."""
+
+    def __init__(self, bench: BenchProfile, machine: MachineProfile, scenarios: Sequence[Scenario], runs: int,
+                 seed: int | None, early_stop: bool, progress: Callable[[str, int, int], None] | None):
+        self.args = (bench, machine, scenarios, runs, seed, early_stop)
+        self.progress, self.per, self.base = progress, runs * len(scenarios), 0
+
+    def __call__(self, cands: list[Candidate]) -> list[Candidate]:
+        bench, machine, scenarios, runs, seed, early_stop = self.args
+        progress = self.progress
+        total = self.base + self.per * sum(c.netlist is not None for c in cands)
+        done = []
+        for c in cands:
+            if c.netlist is None:
+                done.append(c)
+                continue
+            cb = (lambda n, lab=c.label, b=self.base: progress(lab, b + n, total)) if progress else None
+            done.append(evaluate(c, bench, machine, scenarios, runs, seed, early_stop, cb))
+            self.base += self.per
+            if progress is not None:
+                progress(c.label, self.base, total)
+        return done
+
+
+def _ranked(spec: DesignSpec, scenarios: Sequence[Scenario], runs: int, seed: int | None, done: list[Candidate],
+            bench: BenchProfile, tried: tuple[str, ...] = (), repeated: int = 0, unfit: int = 0) -> Recommendation:
+    """The candidates ranked (ties: the order they were made in)."""
     order = {id(c): i for i, c in enumerate(done)}
     ranked = tuple(sorted(done, key=lambda c: c.rank_key(order[id(c)])))
     return Recommendation(spec, tuple(scenarios), runs, seed, ranked, dict(bench.uncertainty.ranges),
-                          bench.uncertainty.distribution)
+                          bench.uncertainty.distribution, variants=tried, repeated=repeated, unfit=unfit)
+
+
+def _patch_key(net) -> str:
+    """What a patch wires, without its names and notes: two candidates with one key run alike."""
+    return net.model_dump_json(exclude={"design", "description", "notes"})
+
+
+def departed(c: Candidate, base: DesignSpec, bench: BenchProfile, whys: dict[str, str] | None = None) -> Candidate:
+    """``c`` with its departures from ``base`` (patchgen.studies.departures): the fields its
+    written spec changes, each with why (``whys`` adds a variant's reasons)."""
+    units = None if c.netlist is None else c.netlist.units
+    why = realisation_whys(c.spec, c.design, bench, units) | (whys or {})
+    return replace(c, departures=departures(base, settled_spec(c.spec, c.design, units), why))
 
 
 def chosen_spec(rec: Recommendation) -> DesignSpec:
-    """The chosen candidate as a spec every other command takes (``recommended.toml``): its
-    estimator and actuator model, with the settings chosen from the bench noise fixed (roll-off,
-    observer pole, Kalman rho) and the slaved units it needs, so that patching it gives the
-    chosen patch again."""
+    """The chosen candidate as a spec every other command takes (``recommended.toml``): its spec
+    as patchgen.studies.departures.settled_spec writes it (the settings chosen from the bench
+    noise fixed, the slaved units it needs), so that patching it gives the chosen patch again."""
     b = rec.best
     if b is None:
         raise ValueError("no candidate was chosen")
-    e, sp = b.design.estimator, b.spec
-    upd: dict = {}
-    if e is not None and e.kind in ("differentiator", "filtered_differentiator"):
-        upd["rolloff_s"] = e.rolloff_s
-    elif e is not None and e.kind == "reduced_observer":
-        upd["observer_pole"] = e.observer.pole
-    elif e is not None and e.kind == "kalman" and e.rho is not None:
-        upd["rho"] = e.rho
-    return sp.model_copy(update={
+    return settled_spec(b.spec, b.design, b.netlist.units).model_copy(update={
         "name": f"{rec.spec.name}-recommended",
         "description": f"{b.label}: chosen by patchgen recommend on the bench",
         "source": f"patchgen recommend {rec.spec.path}",
-        "estimator": sp.estimator.model_copy(update=upd),
-        "patch": sp.patch.model_copy(update={"units": b.netlist.units}),
     })

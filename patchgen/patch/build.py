@@ -46,8 +46,9 @@ def _place_compensator(design: Design, machine: MachineProfile, tries: list[int]
     order = full if p.order == "full" else p.order
     tried = compensator_fit.fits(design, machine, tries, p.form, p.reduction, [order], fast_kept=p.order == "full")
     chosen = compensator_fit.best(tried, design.lqg_margins)
-    if chosen is None:
-        if tried and all(f.error == compensator_fit.UNSTABLE_LAW for f in tried):
+    if chosen is None:  # the spec's order all unstable is the design's fault, whether the fast modes kept fit or not
+        own = [f for f in tried if f.method != compensator_fit.FAST_KEPT]
+        if own and all(f.error == compensator_fit.UNSTABLE_LAW for f in own):
             raise _degenerate(design, order, full)
         raise ResourceError(spec.path, "machine", no_fit_line(tried, machine, tries[-1]))
     net = chosen.netlist

@@ -121,15 +121,17 @@ PERTURBATIONS = 4  # perturbed recomputations per design
 
 def patch_outputs(spec) -> dict[str, str]:
     """What `patchgen patch` writes for a spec, by file name (no bench prediction)."""
+    from patchgen.bench.diagnosis import as_patched_on_bench
     from patchgen.design.lqg import design_on
     from patchgen.patch.build import build_patch
     from patchgen.profiles.bench import load_bench
     from patchgen.profiles.machine import load_machine
     from patchgen.render.patchfiles import patch_files
 
-    machine = load_machine(spec.machine)
-    d = design_on(spec, machine, load_bench(spec.bench))
-    return patch_files(d, machine, build_patch(d, machine))
+    machine, bench = load_machine(spec.machine), load_bench(spec.bench)
+    d = design_on(spec, machine, bench)
+    net = build_patch(d, machine)
+    return patch_files(d, machine, net, judged=as_patched_on_bench(d, net, machine, bench))
 
 
 def outputs_and_spreads(spec) -> tuple[dict[str, str], dict[str, Any]]:

@@ -16,11 +16,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from patchgen.bench.circuit import sensor_constants
+from patchgen.design.lqg import Design
 from patchgen.design.margins import Margins, loop_margins
+from patchgen.design.model import plant_params
+from patchgen.patch.as_patched import AsPatched, as_patched, figures
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import wired_law
 from patchgen.plant.equations import PlantParams, linear_matrices
 from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
 
 # 1/s: a pole within this of the imaginary axis is on it (the eigenvalue solver's error on these
 # loops, of order 1e-12, is far below it; the slowest real mode of a patch, 1e-5 1/s leaks, above)
@@ -117,7 +121,38 @@ def linear_loop(net: Netlist, plant: PlantParams, bench: BenchProfile, tau: floa
 
 
 def bench_margins(net: Netlist, plant: PlantParams, bench: BenchProfile) -> Margins:
-    """Gain and phase margins of the wired loop on the bench, broken at the command voltage u_c.
+    """Gain and phase margins of the wired loop on the bench, broken at the command voltage u_c
+    (:func:`bench_open_loop`)."""
+    return loop_margins(*bench_open_loop(net, plant, bench))
+
+
+def as_patched_on_bench(design: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile) -> AsPatched:
+    """The patch judged as patched (patchgen.patch.as_patched) on the design model and on the
+    bench: the wired loop linearised with the bench's actuator, broken at u_c (:func:`bench_open_loop`).
+
+    Parameters
+    ----------
+    design : Design
+        The design the patch realises (its spec gives the plant).
+    net : Netlist
+        The patch.
+    machine, bench : MachineProfile, BenchProfile
+        The machine it is on, the bench it meets.
+
+    Returns
+    -------
+    AsPatched
+        With its ``bench`` loop.
+    """
+    act = bench.actuator
+    tag = f"actuator lag {act.tau:g} s" if act.model != "gain" and act.tau > 0 else "actuator a pure gain"
+    loop = figures(f"{bench.id} bench, linearised ({tag})", "as patched",
+                   *bench_open_loop(net, plant_params(design.spec), bench))
+    return as_patched(design, net, machine).with_bench(loop)
+
+
+def bench_open_loop(net: Netlist, plant: PlantParams, bench: BenchProfile) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The wired loop on the bench, broken at the command voltage u_c.
 
     The loop as the bench closes it, linearised about upright: plant, the bench's actuator (its
     lag when it has one; the dead zone and limits are not linear), the controller read back from
@@ -132,8 +167,8 @@ def bench_margins(net: Netlist, plant: PlantParams, bench: BenchProfile) -> Marg
 
     Returns
     -------
-    Margins
-        Lower and upper gain limits, phase and delay margins of the wired loop.
+    (numpy.ndarray, numpy.ndarray, numpy.ndarray)
+        A, B, C of L(s) for patchgen.design.margins.loop_margins.
     """
     act = bench.actuator
     tau = act.tau if act.model != "gain" and act.tau > 0 else None
@@ -153,7 +188,7 @@ def bench_margins(net: Netlist, plant: PlantParams, bench: BenchProfile) -> Marg
         B[4, 0] = act.K_U / tau
     C[0, :4] = (law.Dc @ ks)[0]
     C[0, 4 + na:] = law.Cc[0]
-    return loop_margins(A, B, -C, 0.0)
+    return A, B, -C
 
 
 def _wired(net: Netlist, bench: BenchProfile):

@@ -7,6 +7,7 @@ import json
 import click
 from rich.console import Console
 
+from patchgen.bench.diagnosis import as_patched_on_bench
 from patchgen.design.lqg import design_on
 from patchgen.patch.build import build_patch
 from patchgen.render.outputs import check_out_dir, write_files
@@ -34,15 +35,17 @@ def patch_cmd(spec: str, out_dir: str, force: bool, runs_hold: int, no_predict: 
     sp, machine, bench = load_inputs(spec)
     d = design_on(sp, machine, bench)
     net = build_patch(d, machine)
-    files = (patch_files(d, machine, net) if no_predict
-             else predicted_patch_files(d, machine, bench, net, runs_hold=runs_hold))
+    judged = as_patched_on_bench(d, net, machine, bench)
+    files = (patch_files(d, machine, net, judged=judged) if no_predict
+             else predicted_patch_files(d, machine, bench, net, runs_hold=runs_hold, judged=judged))
     written = write_files(out_dir, files, force=force)
     if as_json:
         click.echo(json.dumps({"design": net.design, "machine": net.machine, "units": net.units,
                                "pots": pot_rows(net), "amplifiers": [{"id": a.id, "role": a.role,
                                                                       "carries": a.carries.model_dump()}
                                                                      for a in net.amplifiers],
-                               "notes": net.notes, "written": [str(p) for p in written]},
+                               "notes": net.notes, "margins": judged.as_dict(),
+                               "written": [str(p) for p in written]},
                               indent=2, sort_keys=True, allow_nan=False))
         return
     console = Console()

@@ -17,7 +17,8 @@ def build_patch(design: Design, machine: MachineProfile, units: int | str | None
     spec's [patch] units; "auto" takes the fewest that fit, up to the spec's max_units, else the
     profile's). With ``[patch] realization = "compensator"`` the law is placed as one system
     (patchgen.patch.compensator_fit): the spec's order and form, or the cheapest form of the full
-    order that fits."""
+    order that fits (at the full order, with its fast modes residualised or kept), first among
+    those that keep compensator_fit.KEEP_PM_SHARE of the design's phase margin as dialled."""
     spec = design.spec
     units = spec.patch.units if units is None else units
     cap = spec.patch.max_units or machine.max_units
@@ -43,16 +44,28 @@ def _place_compensator(design: Design, machine: MachineProfile, tries: list[int]
     if p.order != "full" and p.order > full:
         raise spec.error("patch.order", f"the minimal compensator has {full} states (got {p.order})")
     order = full if p.order == "full" else p.order
-    tried = compensator_fit.fits(design, machine, tries, p.form, p.reduction, [order])
-    chosen = compensator_fit.best(tried)
-    if chosen is None:
-        if tried and all(f.error == compensator_fit.UNSTABLE_LAW for f in tried):
+    tried = compensator_fit.fits(design, machine, tries, p.form, p.reduction, [order], fast_kept=p.order == "full")
+    chosen = compensator_fit.best(tried, design.lqg_margins)
+    if chosen is None:  # the spec's order all unstable is the design's fault, whether the fast modes kept fit or not
+        own = [f for f in tried if f.method != compensator_fit.FAST_KEPT]
+        if own and all(f.error == compensator_fit.UNSTABLE_LAW for f in own):
             raise _degenerate(design, order, full)
         raise ResourceError(spec.path, "machine", no_fit_line(tried, machine, tries[-1]))
     net = chosen.netlist
-    notes = list(net.notes) + [f"realisation compared: {f.line()}" for f in tried]
+    notes = list(net.notes) + [f"realisation compared: {f.line()}" for f in tried] + _choice_notes(chosen, design)
     net = net.model_copy(update={"description": spec.description, "notes": notes})
     return net.model_copy(update={"parts": parts_for(net, machine)})
+
+
+def _choice_notes(chosen: compensator_fit.Fit, design: Design) -> list[str]:
+    """A note when the realisation patched keeps less than KEEP_PM_SHARE of the design's phase
+    margin as dialled: none tried that fits the machine keeps it (compensator_fit.best)."""
+    designed = design.lqg_margins
+    if compensator_fit.keeps_margin(chosen, designed):
+        return []
+    m = chosen.dialled_margins
+    return [f"no realisation tried keeps {100 * compensator_fit.KEEP_PM_SHARE:.0f} % of the design's phase margin "
+            f"({designed.pm_deg:.1f} deg) as dialled; the one patched keeps {m.pm_deg:.1f} deg"]
 
 
 def _degenerate(design: Design, order: int, full: int):

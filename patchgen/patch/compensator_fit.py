@@ -6,17 +6,19 @@ and balanced singular perturbation, the integral part kept), each in every form 
 patchgen.patch.compensator_forms, is placed on 1, 2, ... slaved units. A realisation is compared by
 units, pots and amplifiers, its coefficient range, the amplitude its states reach, and the loop's
 margins on the design model with the pots as dialled (the netlist read back), its sensitivity to
-the dial.
+the dial. At the full order the minimal law with its fast modes kept is tried as well
+(:func:`whole_law`): a realisation that keeps KEEP_PM_SHARE of the design's phase margin as dialled
+is chosen before any that keeps less (:func:`best`).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from patchgen.design import compensator as comp
-from patchgen.design.controller import Controller
 from patchgen.design.lqg import Design, loop_with_controller
 from patchgen.design.margins import Margins, loop_margins
 from patchgen.inputs.errors import InputError, ResourceError
@@ -32,12 +34,17 @@ from patchgen.patch.compensator_forms import (
     scaling_plants,
 )
 from patchgen.patch.netlist import Netlist
-from patchgen.patch.readback import wired_law
+from patchgen.patch.readback import si_controller, wired_law
 from patchgen.profiles.machine import MachineProfile
 
 METHODS = ("truncate", "residualise")
 SHRINK_ROUNDS = 4  # placements of one law and form while scaling down the states that overload
 UNSTABLE_LAW = "the loop with this law is unstable on the design model"  # a Fit's error: the law's own fault
+# A realisation whose loop as dialled (the netlist read back, on the design model) keeps this share
+# of the design's phase margin is chosen before every one that keeps less, whatever it costs in
+# units, amplifiers and pots: thesis case 2 residualised keeps 28 % (14.9 of 52.8 deg).
+KEEP_PM_SHARE = 0.8
+FAST_KEPT = "fast modes kept"  # the method of whole_law's law
 
 
 @dataclass(frozen=True)
@@ -45,7 +52,7 @@ class Fit:
     """One realisation tried: the law, its form, and where it landed (or why it did not)."""
 
     order: int
-    method: str  # minimal, truncate or residualise
+    method: str  # minimal, FAST_KEPT, truncate or residualise
     form: str
     law: comp.Compensator
     design_margins: Margins = field(compare=False)
@@ -98,12 +105,50 @@ def _db(x: float | None) -> str:
     return "inf" if x is None else f"{x:.1f}"
 
 
+def pm_share(patched: Margins | None, designed: Margins | None) -> float | None:
+    """The share of the design's phase margin a loop keeps.
+
+    None when the design has none to keep (its loop unstable, or no gain crossover); 0 for a loop
+    that is not stable; infinite for a stable one without a gain crossover (|L| never 1).
+    """
+    if designed is None or not designed.stable or not designed.pm_deg:
+        return None
+    if patched is None or not patched.stable:
+        return 0.0
+    return math.inf if patched.pm_deg is None else patched.pm_deg / designed.pm_deg
+
+
+def keeps_margin(fit: Fit, designed: Margins | None) -> bool:
+    """The fit's dialled loop keeps KEEP_PM_SHARE of ``designed``'s phase margin (or there is none to keep)."""
+    share = pm_share(fit.dialled_margins, designed)
+    return fit.holds_dialled if share is None else share >= KEEP_PM_SHARE
+
+
+def _fastest(machine: MachineProfile) -> float:
+    """The fastest mode laws() patches unresidualised (rad/s): a gain stage into a full-weight input
+    of the machine's fastest integrator mode (the top gain squared times its k0)."""
+    return large_gains.top_gain(machine) ** 2 * max(m.k0_per_s for m in machine.integrator_modes)
+
+
+def whole_law(design: Design, machine: MachineProfile) -> tuple[int, str, comp.Compensator] | None:
+    """The minimal law with the modes :func:`laws` residualises kept (None when it residualises none).
+
+    The cut at the top gain squared is on a mode's magnitude; a complex pair's own coefficients in
+    modal form are its real and imaginary parts, each below it (thesis case 2's -76 +/- 76j pair,
+    108 rad/s), and its couplings can be balanced across a gain stage on each side
+    (patchgen.patch.compensator_forms). Whether the machine takes it, placing it tells.
+    """
+    whole = comp.compensator(design)
+    if (np.abs(np.linalg.eigvals(whole.A)) <= _fastest(machine)).all():
+        return None
+    return whole.order, FAST_KEPT, whole
+
+
 def laws(design: Design, machine: MachineProfile, method: str = "auto") -> list[tuple[int, str, comp.Compensator]]:
     """The minimal law (modes faster than a gain stage into a full-weight input of the fastest
     integrator mode reaches, the top gain squared times its k0, residualised) and each
     lower order down to the integral part alone: (order, method, law), highest order first."""
-    fastest = large_gains.top_gain(machine) ** 2 * max(m.k0_per_s for m in machine.integrator_modes)
-    full = comp.without_fast_modes(comp.compensator(design), fastest)
+    full = comp.without_fast_modes(comp.compensator(design), _fastest(machine))
     out = [(full.order, "minimal", full)]
     methods = METHODS if method == "auto" else (method,)
     low = (0 if full.R is None else 1) + full.unstable
@@ -115,12 +160,7 @@ def laws(design: Design, machine: MachineProfile, method: str = "auto") -> list[
 
 def dialled_margins(design: Design, net: Netlist) -> Margins:
     """The loop's margins on the design model with the law read back from the netlist (pots as dialled)."""
-    law = wired_law(net)
-    vpu = {s.id: s.volts_per_unit for s in net.sensors}
-    ks = np.diag([vpu[s] for s in law.inputs])
-    KU = net.output.K_U_N_per_V
-    ctl = Controller(law.states, law.Ac, law.Bc @ ks, KU * law.Cc, KU * law.Dc @ ks)
-    A, B, C = loop_with_controller(design.model, ctl)
+    A, B, C = loop_with_controller(design.model, si_controller(net))
     return loop_margins(A, B, C)
 
 
@@ -203,7 +243,7 @@ def _place_scaled(design: Design, order: int, method: str, law: comp.Compensator
 
 
 def fits(design: Design, machine: MachineProfile, units: list[int], form: str = "auto",
-         method: str = "auto", orders: list[int] | None = None) -> list[Fit]:
+         method: str = "auto", orders: list[int] | None = None, fast_kept: bool = False) -> list[Fit]:
     """Every law and form tried on ``units`` (in the order given), highest order first.
 
     Parameters
@@ -218,6 +258,8 @@ def fits(design: Design, machine: MachineProfile, units: list[int], form: str = 
         A form of FORMS and a reduction of METHODS, or "auto" for every one.
     orders : list of int, optional
         Only these orders (default: every order).
+    fast_kept : bool
+        :func:`whole_law` first, whatever ``orders`` (when there is one).
 
     Returns
     -------
@@ -225,19 +267,23 @@ def fits(design: Design, machine: MachineProfile, units: list[int], form: str = 
         In the order of :func:`laws`, each form within.
     """
     forms = FORMS if form == "auto" else (form,)
+    wanted = [(o, m, law) for o, m, law in laws(design, machine, method) if orders is None or o in orders]
+    whole = whole_law(design, machine) if fast_kept else None
     out = []
-    for order, m, law in laws(design, machine, method):
-        if orders is not None and order not in orders:
-            continue
+    for order, m, law in ([whole] if whole else []) + wanted:
         out += [try_fit(design, order, m, law, f, machine, units) for f in forms]
     return out
 
 
-def best(candidates: list[Fit]) -> Fit | None:
-    """The cheapest realisation of the highest order that fits with a stable dialled loop and no
-    amplifier past the reference over the scaling excursions."""
+def best(candidates: list[Fit], designed: Margins | None = None) -> Fit | None:
+    """Of the realisations that fit with a stable dialled loop and no amplifier past the reference
+    over the scaling excursions: the cheapest (Fit.key) of those that keep KEEP_PM_SHARE of
+    ``designed``'s phase margin (the design's loop), else the cheapest of the highest order."""
     ok = [f for f in candidates if f.netlist is not None and f.holds_dialled and f.peak_fraction <= 1.0]
     if not ok:
         return None
+    keep = [f for f in ok if keeps_margin(f, designed)] if designed is not None else []
+    if keep:
+        return min(keep, key=Fit.key)
     top = max(f.order for f in ok)
     return min((f for f in ok if f.order == top), key=Fit.key)

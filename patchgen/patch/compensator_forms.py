@@ -18,7 +18,8 @@ the scaling excursions (the largest initial angle and cart step of the shipped s
 sigma_i is chosen so that the state's peak is AMPLITUDE of the reference (over the design model's
 loop and, when it models the actuator, the loop with the actuator a pure gain as well); then lowered, by at most
 EXACT_SPAN, to the largest sigma that makes one of the state's input or output coefficients equal
-to an input weight exactly (that term needs no pot).
+to an input weight exactly (that term needs no pot). A state whose output coefficients would
+then pass what a gain stage carries is scaled to balance its inputs and outputs instead (_scale).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import scipy.linalg as sla
 from patchgen.design.compensator import Compensator
 from patchgen.design.lqg import Design
 from patchgen.design.model import plant_params
+from patchgen.patch import large_gains
 from patchgen.patch.realization import Block, Realization, Term
 from patchgen.plant.equations import linear_matrices
 from patchgen.profiles.machine import MachineProfile
@@ -184,17 +186,28 @@ def excursion_peaks(Acl: np.ndarray, Cout: np.ndarray, where: list[int]) -> np.n
     return peak
 
 
-def _scale(peak: float, reference: float, into: list[float], outof: list[float], weights, rate: float) -> float:
+def _scale(peak: float, reference: float, into: list[float], outof: list[float], weights, rate: float,
+           reach: float) -> float:
     """sigma for one state: peak at AMPLITUDE of the reference (divided by the gain stage its own
     rate ``rate`` needs beyond the largest weight, and lower if an input coefficient, which grows
     with sigma, would pass the largest weight), then lowered by at most EXACT_SPAN so that a
-    coefficient proportional to sigma (``into``: the factor) or to 1/sigma (``outof``) is a weight."""
+    coefficient proportional to sigma (``into``: the factor) or to 1/sigma (``outof``) is a weight.
+
+    A mode that is both fast and strongly coupled (thesis case 2's -76 +/- 76j pair) has input and
+    output coefficients whose product no sigma changes; with its inputs at the largest weight its
+    outputs would pass ``reach``, what a gain stage carries (the top gain squared). Such a state is
+    scaled where the two balance (their geometric mean), a gain stage's reach on each side, and
+    not lowered past where its outputs reach ``reach``."""
     top = AMPLITUDE * reference / max(1.0, rate / max(weights)) / peak if peak > 0 else 1.0
-    biggest = max(into, default=0.0)
+    biggest, out = max(into, default=0.0), max(outof, default=0.0)
+    floor = 0.0
     if biggest > 0:
-        top = min(top, max(weights) / biggest)
+        cap = max(weights) / biggest
+        if out > reach * cap:
+            cap, floor = math.sqrt(out / biggest), out / reach
+        top = min(top, cap)
     cands = [w / f for f in into if f > 0 for w in weights] + [f / w for f in outof if f > 0 for w in weights]
-    ok = [s for s in cands if top / EXACT_SPAN <= s <= top * (1 + 1e-12)]
+    ok = [s for s in cands if max(top / EXACT_SPAN, floor) <= s <= top * (1 + 1e-12)]
     return max(ok) if ok else top
 
 
@@ -229,6 +242,7 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
     y = list(c.inputs)
     KU, T, ref = spec.actuator.K_U, machine.time_scale_s, machine.reference_V
     weights = [float(w) for w in machine.input_weights]
+    reach = large_gains.top_gain(machine) ** 2
     fs = form_system(c, form)
     shrink = shrink or {}
     pI, px = peaks(design, c, fs)
@@ -237,12 +251,12 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
     sig: dict[str, float] = {}
     if c.R is not None:
         into = [abs(T * c.R[0, k]) / ks[m] for k, m in enumerate(y)]
-        sig["int"] = _scale(pI, ref * shrink.get("int", 1.0), into, [1.0 / KU], weights, 0.0)
+        sig["int"] = _scale(pI, ref * shrink.get("int", 1.0), into, [1.0 / KU], weights, 0.0, reach)
     names = [f"c{i + 1}" for i in range(n)]
     for i, nm in enumerate(names):
         into = [abs(T * fs.B[i, k]) / ks[m] for k, m in enumerate(y)]
         rate = T * max(np.abs(fs.A[i]).max(), np.abs(fs.A[:, i]).max())
-        sig[nm] = _scale(px[i], ref * shrink.get(nm, 1.0), into, [abs(fs.C[0, i]) / KU], weights, rate)
+        sig[nm] = _scale(px[i], ref * shrink.get(nm, 1.0), into, [abs(fs.C[0, i]) / KU], weights, rate, reach)
 
     if form == "modal":  # a complex pair's two states share one scale: its rotation stays balanced
         for i in range(n):

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from patchgen.design.controller import Controller
 from patchgen.inputs.errors import InputError
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.reading import read
@@ -89,6 +90,28 @@ def wired_law(net: Netlist, output: str | None = None) -> WiredLaw:
         Ac[k], Bc[k] = row[:nx], row[nx:]
     o = expr[output or r.output]
     return WiredLaw(tuple(sensors), tuple(dyn), Ac, Bc, o[None, :nx], o[None, nx:])
+
+
+def si_controller(net: Netlist) -> Controller:
+    """The wired law in the design's units: from the sensors' quantities (m, rad, m/s; the
+    netlist's sensor order) to the force u (N), through the sensor constants and K_U.
+
+    Parameters
+    ----------
+    net : Netlist
+        The patch, its pots as dialled.
+
+    Returns
+    -------
+    Controller
+        xc' = Ac xc + Bc y, u = Cc xc + Dc y over the wired states (patchgen.design.lqg's
+        convention: a design's controller in the same form).
+    """
+    law = wired_law(net)
+    vpu = {s.id: s.volts_per_unit for s in net.sensors}
+    ks = np.diag([vpu[s] for s in law.inputs])
+    KU = net.output.K_U_N_per_V
+    return Controller(law.states, law.Ac, law.Bc @ ks, KU * law.Cc, KU * law.Dc @ ks)
 
 
 def _unit(i: int, n: int) -> np.ndarray:

@@ -10,18 +10,20 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from patchgen.design.lqg import Design
-from patchgen.design.margins import Margins
+from patchgen.patch.as_patched import AsPatched, as_patched
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.static_check import StaticCheck, static_check, static_check_csv
 from patchgen.profiles.machine import MachineProfile
 from patchgen.render.diagram import diagram_pages, wiring_svg
+from patchgen.render.margins_view import margin_cells, margins_json
 from patchgen.render.pottable import pots_csv
 from patchgen.render.sheet import SheetSection, SheetSummary, render_sheet
 
-PATCH_FILES = ("netlist.json", "pots.csv", "static-check.csv", "wiring.svg", "patch-sheet.html", "patch-sheet.md")
+PATCH_FILES = ("netlist.json", "margins.json", "pots.csv", "static-check.csv", "wiring.svg", "patch-sheet.html",
+               "patch-sheet.md")
 
 
-def sheet_summary(d: Design, sections: Sequence[SheetSection] = ()) -> SheetSummary:
+def sheet_summary(d: Design, sections: Sequence[SheetSection] = (), judged: AsPatched | None = None) -> SheetSummary:
     """The design as the patch sheet summarises it: gains, poles, margins, estimator.
 
     Parameters
@@ -30,21 +32,24 @@ def sheet_summary(d: Design, sections: Sequence[SheetSection] = ()) -> SheetSumm
         The design the patch realises.
     sections : sequence of SheetSection
         Extra tables for the sheet, in order.
+    judged : AsPatched, optional
+        The patch judged as patched: its loops beside the design's ('Margins as patched').
 
     Returns
     -------
     SheetSummary
         What :func:`patchgen.render.sheet.render_sheet` shows beside the netlist.
     """
-    margins = {"LQR (state feedback)": _margin_cells(d.lqr_margins)}
-    if d.estimator is not None and d.lqg_margins is not None:
-        margins[f"as patched ({d.estimator.kind})"] = _margin_cells(d.lqg_margins)
+    margins = {"LQR (state feedback)": margin_cells(d.lqr_margins)}
+    if d.estimator is not None and d.lqg_margins is not None and judged is None:  # else beside the patch's
+        margins[f"as designed ({d.estimator.kind})"] = margin_cells(d.lqg_margins)
     kind = "none (all states measured)" if d.estimator is None else d.estimator.kind
     if d.estimator is not None and d.estimator.rolloff_s:
         kind += f", roll-off {d.estimator.rolloff_s:g} s"
     return SheetSummary(design=d.spec.name, description=d.spec.description, states=list(d.states),
                         K=[float(k) for k in d.K[0]], poles=list(d.closed_loop_poles), margins=margins,
-                        estimator=kind, sections=list(sections), K_spread=[float(u) for u in d.spread.K[0]])
+                        estimator=kind, sections=list(sections), K_spread=[float(u) for u in d.spread.K[0]],
+                        judged=judged)
 
 
 def static_section(check: StaticCheck, net: Netlist) -> SheetSection:
@@ -79,17 +84,8 @@ def _setup_lines(check: StaticCheck) -> list[str]:
     return out
 
 
-def _margin_cells(m: Margins) -> dict[str, str]:
-    if not m.stable:
-        return {"stable": "no"}
-    return {"lower GM": "none" if m.lower_gm is None else f"{m.lower_gm:.4f} ({m.lower_gm_db:+.2f} dB)",
-            "upper GM": "inf" if m.upper_gm is None else f"{m.upper_gm:.4f} ({m.upper_gm_db:+.2f} dB)",
-            "PM": "-" if m.pm_deg is None else f"{m.pm_deg:.2f} deg",
-            "delay margin": "-" if m.delay_margin_s is None else f"{m.delay_margin_s * 1000:.1f} ms"}
-
-
-def patch_files(d: Design, machine: MachineProfile, net: Netlist,
-                sections: Sequence[SheetSection] = ()) -> dict[str, str]:
+def patch_files(d: Design, machine: MachineProfile, net: Netlist, sections: Sequence[SheetSection] = (),
+                judged: AsPatched | None = None) -> dict[str, str]:
     """Every file of a patch (PATCH_FILES), rendered in memory; nothing is written.
 
     Parameters
@@ -102,16 +98,21 @@ def patch_files(d: Design, machine: MachineProfile, net: Netlist,
         The patch.
     sections : sequence of SheetSection
         Extra tables for the sheet, in order.
+    judged : AsPatched, optional
+        The patch judged as patched, on the bench too (patchgen.bench.diagnosis.as_patched_on_bench);
+        by default on the design model alone.
 
     Returns
     -------
     dict
         File name -> text, for :func:`patchgen.render.outputs.write_files`.
     """
+    judged = judged if judged is not None else as_patched(d, net, machine)
     check = static_check(net, machine)
-    files = {"netlist.json": net.to_json(), "pots.csv": pots_csv(net), "static-check.csv": static_check_csv(check)}
+    files = {"netlist.json": net.to_json(), "margins.json": margins_json(judged, net.design), "pots.csv": pots_csv(net),
+             "static-check.csv": static_check_csv(check)}
     svg = wiring_svg(net)
-    html, md = render_sheet(net, sheet_summary(d, [*sections, static_section(check, net)]), diagram_pages(net),
-                            machine.procedure)
+    html, md = render_sheet(net, sheet_summary(d, [*sections, static_section(check, net)], judged),
+                            diagram_pages(net), machine.procedure)
     files.update({"wiring.svg": svg, "patch-sheet.html": html, "patch-sheet.md": md})
     return files

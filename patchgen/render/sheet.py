@@ -16,12 +16,14 @@ from dataclasses import dataclass, field
 import jinja2
 
 from patchgen.design.precision import gain_text, significant_digits
+from patchgen.patch.as_patched import AsPatched
 from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
 from patchgen.patch.parts import fmt_value
 from patchgen.patch.reading import read
 from patchgen.patch.realization import STATE_UNITS
 from patchgen.profiles.machine import Procedure
 from patchgen.render.diagram_symbols import SMALLEST_PT, dial_decimals, quantity_label, signed_label
+from patchgen.render.margins_view import patched_banner, patched_context
 
 SHEET_WIDTH_MM = 186.0  # the printed content's width: A4 and Letter's common 210 mm less 12 mm margins
 # The room the diagram gets on two printed pages, by the number of extra sections (bench
@@ -63,6 +65,7 @@ class SheetSummary:
     estimator: str
     sections: list[SheetSection] = field(default_factory=list)
     K_spread: list[float] = field(default_factory=list)  # per gain, the design's (0: fully determined)
+    judged: AsPatched | None = None  # the patch judged as patched: the sheet's 'Margins as patched'
 
 
 def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[str, str]],
@@ -162,8 +165,11 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
     # the diagram gets the room the extra sections leave on two printed pages (a third when it
     # needs more to print its labels at PRINTED_MIN_PT: diagram_height_mm)
     diagram_mm = DIAGRAM_ROOM_MM.get(len(summary.sections), DIAGRAM_ROOM_MM_MORE)
+    judged = summary.judged
+    banners = [patched_banner(judged)] if judged is not None else []
     return {
-        "banners": [sec.banner for sec in summary.sections if sec.banner],
+        "banners": [b for b in banners + [sec.banner for sec in summary.sections] if b],
+        "patched": patched_context(judged) if judged is not None else None,
         "gain_note": ("A gain marked * is fixed by the design to fewer digits (" + "; ".join(gain_notes)
                       + "; a nearly uncontrollable mode): further digits, and those of the pots set from it, "
                       "follow the computer's arithmetic, not the design.") if gain_notes else "",

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 from patchgen.design.lqg import Design
 from patchgen.design.model import plant_params
 from patchgen.inputs.scenario import load_scenario
+from patchgen.patch.as_patched import AsPatched
 from patchgen.patch.netlist import Netlist
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
@@ -130,7 +131,12 @@ def failure_banner(bench_id: str, loop, preds) -> str:
 def predicted_patch_files(d: Design, machine: MachineProfile, bench: BenchProfile, net: Netlist,
                           sections: Sequence[SheetSection] = (), runs_hold: int = HOLD_RUNS,
                           done: dict[str, list[RunSummary]] | None = None,
-                          corners: BenchStudy | None = None) -> dict[str, str]:
+                          corners: BenchStudy | None = None, judged: AsPatched | None = None) -> dict[str, str]:
     """Every file of a patch (patchgen.render.patchfiles.PATCH_FILES), the bench prediction first
-    on the sheet, then ``sections``; arguments as :func:`bench_section`."""
-    return patch_files(d, machine, net, [bench_section(d, machine, bench, net, runs_hold, done, corners), *sections])
+    on the sheet, then ``sections``; arguments as :func:`bench_section`, and the patch judged as
+    patched (patchgen.bench.diagnosis.as_patched_on_bench, computed when not given)."""
+    from patchgen.bench.diagnosis import as_patched_on_bench
+
+    judged = judged if judged is not None else as_patched_on_bench(d, net, machine, bench)
+    return patch_files(d, machine, net, [bench_section(d, machine, bench, net, runs_hold, done, corners), *sections],
+                       judged)

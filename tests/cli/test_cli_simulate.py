@@ -130,6 +130,13 @@ def test_patch_json(tmp_path):
     d = json.loads(r.stdout)
     assert {p["signal"] for p in d["pots"] if p["weight"] == 10} == {"theta", "s_dot"}
     assert d["machine"] == "gp6" and d["units"] == 1
+    designed, patched, bench = d["margins"]["loops"]  # as patched beside as designed, as in margins.json
+    assert (designed["law"], patched["law"], patched["loop"]) == ("as designed (differentiator)", "as patched",
+                                                                  "design model")
+    assert (designed["margins"]["pm_deg"], patched["margins"]["pm_deg"]) == (pytest.approx(60.85, abs=0.01),
+                                                                             pytest.approx(60.87, abs=0.01))
+    assert bench["loop"].startswith("uw-1991 bench") and not bench["margins"]["stable"]
+    assert json.loads((tmp_path / "o" / "margins.json").read_text())["loops"] == d["margins"]["loops"]
 
 
 def test_the_summary_names_the_scenarios_own_fall_angle(tmp_path):

@@ -4,12 +4,12 @@ fewest slaved units that take it (up to the spec's max_units, else the profile's
 
 from __future__ import annotations
 
-from patchgen.design.lqg import design_on
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.compensator_fit import laws
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.studies.design_memo import designed
 
 
 def compensator_specs(specs: list[tuple[str, str, DesignSpec]], machine: MachineProfile,
@@ -33,7 +33,7 @@ def compensator_specs(specs: list[tuple[str, str, DesignSpec]], machine: Machine
         if kind != "kalman" or sp.patch.realization == "compensator":
             continue
         try:
-            full = laws(design_on(sp, machine, bench), machine, "truncate")[0][0]
+            full = laws(designed(sp, machine, bench), machine, "truncate")[0][0]
         except (InputError, ValueError):
             continue
         for order in range(full, 0, -1):

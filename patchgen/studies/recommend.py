@@ -40,7 +40,7 @@ from dataclasses import replace
 
 from patchgen.bench.diagnosis import bench_margins, diagnose
 from patchgen.bench.simulate import simulate
-from patchgen.design.lqg import Design, design_on
+from patchgen.design.lqg import Design
 from patchgen.design.model import plant_params
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
@@ -53,6 +53,7 @@ from patchgen.studies.bench_corners import study
 from patchgen.studies.candidate import Candidate, Recommendation
 from patchgen.studies.compensator_candidates import compensator_specs
 from patchgen.studies.departures import departures, realisation_whys, settled_spec
+from patchgen.studies.design_memo import designed
 from patchgen.studies.ranking import ROUND_RUNS, ScenarioOutcome, decision, outcome
 
 CANDIDATES = (
@@ -117,7 +118,7 @@ def allocate(label: str, kind: str, sp: DesignSpec, machine: MachineProfile, ben
     """One candidate designed and allocated (on slaved units if the machine allows and one is not
     enough), with its wired loop's verdict and margins on the bench; an error is kept."""
     try:
-        d = design_on(sp, machine, bench)
+        d = designed(sp, machine, bench)
     except InputError as exc:
         return Candidate(label, kind, sp, None, None, exc.message)
     try:

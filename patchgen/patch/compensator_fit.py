@@ -28,8 +28,11 @@ from patchgen.patch.compensator_forms import (
     AMPLITUDE,
     FORMS,
     STAGE_SUFFIX,
+    FormSystem,
     coefficient_range,
     excursion_peaks,
+    form_system,
+    peaks,
     realize_compensator,
     scaling_plants,
 )
@@ -188,33 +191,38 @@ def _block_of(quantity: str) -> str:
 
 
 def try_fit(design: Design, order: int, method: str, law: comp.Compensator, form: str, machine: MachineProfile,
-            units: list[int]) -> Fit:
+            units: list[int], dm: Margins | None = None) -> Fit:
     """Place one law in one form on the fewest of ``units`` slaved units that takes it; a state whose
     amplifiers (its own, its partial sum, its gain stage) pass AMPLITUDE of the reference over the
     scaling excursions is scaled down and placed again (SHRINK_ROUNDS at most). When no count of
     units takes it, or an amplifier still passes the reference (a partial sum of u_c, say, whose
     terms cancel only in u_c), the blocks with coefficients above one input's reach are staged
     (patchgen.patch.compensator_forms.staged_blocks) and placed again; the staged patch is taken
-    when it fits within the reference, or comes nearer to it."""
-    dm = comp.margins(design, law)
+    when it fits within the reference, or comes nearer to it. ``dm``: the law's margins on the
+    design model when the caller has them (:func:`fits` tries each law in every form)."""
+    dm = comp.margins(design, law) if dm is None else dm
     if not dm.stable:
         return Fit(order, method, form, law, dm, error=UNSTABLE_LAW)
-    plain = _place_scaled(design, order, method, law, form, machine, units, dm, staged=False)
+    fs = form_system(law, form)
+    pk = peaks(design, law, fs)  # the form's scaling excursions: the same however its states are shrunk or staged
+    plain = _place_scaled(design, order, method, law, fs, pk, machine, units, dm, staged=False)
     if plain.netlist is not None and plain.peak_fraction <= 1.0:
         return plain
-    again = _place_scaled(design, order, method, law, form, machine, units, dm, staged=True)
+    again = _place_scaled(design, order, method, law, fs, pk, machine, units, dm, staged=True)
     if again.netlist is None or (plain.netlist is not None and again.peak_fraction >= plain.peak_fraction):
         return plain
     return again
 
 
-def _place_scaled(design: Design, order: int, method: str, law: comp.Compensator, form: str,
-                  machine: MachineProfile, units: list[int], dm: Margins, staged: bool) -> Fit:
-    """:func:`try_fit` for one choice of staging."""
+def _place_scaled(design: Design, order: int, method: str, law: comp.Compensator, fs: FormSystem,
+                  pk: tuple[float, np.ndarray], machine: MachineProfile, units: list[int], dm: Margins,
+                  staged: bool) -> Fit:
+    """:func:`try_fit` for one choice of staging (``fs`` the law in its form, ``pk`` its peaks)."""
+    form = fs.form
     shrink: dict[str, float] = {}
     err = None
     for _ in range(SHRINK_ROUNDS):
-        real = realize_compensator(design, law, form, machine, shrink, staged)
+        real = realize_compensator(design, law, form, machine, shrink, staged, (fs, pk))
         rng = coefficient_range(real, machine.pot_resolution)
         net = None
         for n in units:
@@ -271,7 +279,8 @@ def fits(design: Design, machine: MachineProfile, units: list[int], form: str = 
     whole = whole_law(design, machine) if fast_kept else None
     out = []
     for order, m, law in ([whole] if whole else []) + wanted:
-        out += [try_fit(design, order, m, law, f, machine, units) for f in forms]
+        dm = comp.margins(design, law)  # the law's own: the same in every form
+        out += [try_fit(design, order, m, law, f, machine, units, dm) for f in forms]
     return out
 
 

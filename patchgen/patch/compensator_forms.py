@@ -212,7 +212,8 @@ def _scale(peak: float, reference: float, into: list[float], outof: list[float],
 
 
 def realize_compensator(design: Design, c: Compensator, form: str, machine: MachineProfile,
-                        shrink: dict[str, float] | None = None, staged: bool = False) -> Realization:
+                        shrink: dict[str, float] | None = None, staged: bool = False,
+                        scaled: tuple[FormSystem, tuple[float, np.ndarray]] | None = None) -> Realization:
     """The compensator in ``form`` as integrate blocks and the u_c summer, in machine volts.
 
     Parameters
@@ -231,6 +232,9 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
     staged : bool
         Each block with a coefficient above what one input carries sums its terms at 1/g on a
         summer of its own, taken back at g (:func:`staged_blocks`).
+    scaled : (FormSystem, (float, ndarray)), optional
+        The law in ``form`` and its :func:`peaks`, when the caller has them (one form is placed
+        again with its states shrunk or staged; the excursions stay the same).
 
     Returns
     -------
@@ -243,9 +247,11 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
     KU, T, ref = spec.actuator.K_U, machine.time_scale_s, machine.reference_V
     weights = [float(w) for w in machine.input_weights]
     reach = large_gains.top_gain(machine) ** 2
-    fs = form_system(c, form)
+    if scaled is None:
+        fs = form_system(c, form)
+        scaled = fs, peaks(design, c, fs)
+    fs, (pI, px) = scaled
     shrink = shrink or {}
-    pI, px = peaks(design, c, fs)
     n = fs.A.shape[0]
     blocks: list[Block] = []
     sig: dict[str, float] = {}

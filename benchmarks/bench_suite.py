@@ -6,7 +6,8 @@ slowest modules (their tests' setup, call and teardown summed, from --durations=
 
 Run: python benchmarks/bench_suite.py [--warm-only] [--keep DIR]
 The clone takes the interpreter that runs this script (patchgen and the test extras installed
-in it, editable or not: the clone's own sources are put first on PYTHONPATH). The core count
+in it, editable or not: the clone's own sources are put first on PYTHONPATH), and Python's
+default of writing bytecode, as on a fresh machine (PYTHONDONTWRITEBYTECODE is dropped). The core count
 and the load average before and after are printed: a busy machine is slower.
 """
 
@@ -35,6 +36,7 @@ def load() -> str:
 def run_suite(clone: Path, cache: Path) -> tuple[float, float, str]:
     """Wall and CPU seconds of the README's test command in ``clone``, and its output."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(clone))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)  # a fresh machine writes bytecode: the clone's first run compiles it
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     r = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "--durations=0"], cwd=clone,

@@ -3,14 +3,19 @@
 import os
 import subprocess
 import sys
+import tempfile
+import time
 from pathlib import Path
 
 import pytest
 
 import patchgen  # noqa: F401  first, so its one-thread BLAS setting is in place before numpy loads
+from tests.warm_kernels import GROUPS, WARM_DIR_ENV
 
 ROOT = Path(__file__).resolve().parent.parent
 DESIGNS = ROOT / "designs"
+WARM_TIMEOUT_S = 300.0  # a worker waits this long at most for the kernels to be compiled
+_WARMING = pytest.StashKey[list]()
 
 
 @pytest.fixture
@@ -19,17 +24,35 @@ def root() -> Path:
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    """Before the workers of a run over several (pytest-xdist) start, compile patchgen's numba
-    kernels into numba's cache once, the two groups side by side (tests/warm_kernels.py): without
-    it, the workers' first modules meet the same kernels at the same moment on a fresh install and
-    each compiles them, about 20 s of CPU twice over. With the cache filled it only loads them."""
+    """On the controller of a run over several workers (pytest-xdist), start compiling patchgen's
+    numba kernels into numba's cache, the two groups side by side (tests/warm_kernels.py), while
+    the workers start and collect; each worker waits for them before its first test
+    (pytest_collection_finish). Without it, the workers' first modules meet the same kernels at the
+    same moment on a fresh install and each compiles them, about 20 s of CPU twice over. With the
+    cache filled it only loads them."""
     if hasattr(config, "workerinput") or not config.getoption("numprocesses", None):
         return
+    folder = tempfile.mkdtemp(prefix="patchgen-warm-")
+    os.environ[WARM_DIR_ENV] = folder  # the workers, started after this, inherit it
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
-    groups = [subprocess.Popen([sys.executable, "-m", "tests.warm_kernels", group], cwd=ROOT, env=env,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for group in ("bench", "identify")]
-    for proc in groups:
-        proc.wait()  # a failure is the tests' to show: they run the same code
+    config.stash[_WARMING] = [subprocess.Popen([sys.executable, "-m", "tests.warm_kernels", group], cwd=ROOT,
+                                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                              for group in GROUPS]
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """A worker waits for the kernels its controller is compiling (pytest_configure)."""
+    folder = os.environ.get(WARM_DIR_ENV)
+    if not folder or not hasattr(session.config, "workerinput"):
+        return
+    deadline = time.monotonic() + WARM_TIMEOUT_S
+    while not all((Path(folder) / f"{g}.done").exists() for g in GROUPS) and time.monotonic() < deadline:
+        time.sleep(0.05)
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    for proc in config.stash.get(_WARMING, []):
+        proc.wait()
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

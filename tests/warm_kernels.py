@@ -1,16 +1,22 @@
 """Compile (or load) one group of patchgen's numba kernels by running a small real workload:
 ``python -m tests.warm_kernels bench`` (the simulator's engine, the plant, swing-up's schedule
 kernel) or ``identify`` (bench-test's recordings and identify's filters). tests/conftest.py runs
-both side by side before a run over several workers starts, so that each kernel is compiled once
-into numba's cache rather than by every worker that meets it first at the same moment."""
+both side by side while the workers of a run over several collect, so that each kernel is
+compiled once into numba's cache rather than by every worker that meets it first at the same
+moment. When WARM_DIR_ENV names a folder, ``<group>.done`` is written there at the end, whether
+the workload succeeded or not (a failure is the tests' to show: they run the same code)."""
 
 from __future__ import annotations
 
+import os
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
+
+WARM_DIR_ENV = "PATCHGEN_TESTS_WARM_DIR"
+GROUPS = ("bench", "identify")
 
 
 def bench() -> None:
@@ -44,4 +50,8 @@ def identify() -> None:
 
 
 if __name__ == "__main__":
-    {"bench": bench, "identify": identify}[sys.argv[1]]()
+    try:
+        {"bench": bench, "identify": identify}[sys.argv[1]]()
+    finally:
+        if os.environ.get(WARM_DIR_ENV):
+            (Path(os.environ[WARM_DIR_ENV]) / f"{sys.argv[1]}.done").touch()

@@ -18,7 +18,7 @@ import patchgen
 PKG = Path(patchgen.__file__).parent
 
 # lowest first: each folder may import itself and the folders before it
-LAYERS = ("inputs", "profiles", "plant", "design", "patch", "render", "bench", "identify", "spice", "swingup",
+LAYERS = ("plant", "inputs", "profiles", "design", "patch", "render", "bench", "identify", "spice", "swingup",
           "studies", "cli")
 
 

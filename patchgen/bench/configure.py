@@ -26,11 +26,12 @@ from patchgen.bench.noise_drift import NoiseAndDrift, noise_and_drift
 from patchgen.bench.results import SimSettings
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
+from patchgen.plant.compiled import VECTOR_PARAMETERS, plant_vector
 from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
-SPREAD_ORDER = ("M", "m", "l", "g", "b_VF", "c", "d")  # PLANT_VECTOR's parameters (d: half track)
+SPREAD_ORDER = VECTOR_PARAMETERS  # PLANT_VECTOR's parameters (d: half track)
 
 
 def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
@@ -139,7 +140,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
                       param2=_f64(circuit.param2), ic=_f64(circuit.ic_V),
                       drift=_f64(_drifts(circuit, levels, machine))),
         disturbances=Disturbances(kind=_i64(kinds), t0=_f64(t0s), t1=_f64(t1s), value=_f64(vals)),
-        plant=_f64([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c, plant.d / 2]),
+        plant=plant_vector(plant),
         plant_spread=_f64([spread.get(k, 0.0) for k in SPREAD_ORDER]),
         actuator=_f64([act.K_U, tau, dead, flim]),
         bench_spread=bs.plan(ranges, bench.uncertainty.distribution,

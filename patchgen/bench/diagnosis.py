@@ -22,7 +22,7 @@ from patchgen.design.model import plant_params
 from patchgen.patch.as_patched import AsPatched, as_patched, figures
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import wired_law
-from patchgen.plant.equations import PlantParams, linear_matrices
+from patchgen.plant.equations import PLANT_STATES, PlantParams, linear_matrices
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
@@ -99,7 +99,7 @@ def linear_loop(net: Netlist, plant: PlantParams, bench: BenchProfile, tau: floa
     law, ks = _wired(net, bench)
     Ap, Bp = linear_matrices(plant)
     K_U = bench.actuator.K_U
-    names = ["s", "theta", "s_dot", "theta_dot"]
+    names = list(PLANT_STATES)
     nc = law.Ac.shape[0]
     # u_c = Cc xc + Dc ks x
     if tau is None:
@@ -195,7 +195,7 @@ def _wired(net: Netlist, bench: BenchProfile):
     """The controller as wired (patchgen.patch.readback.wired_law) and the map ks from the plant
     state to its inputs' volts (the bench's sensor constants): u_c = Cc xc + Dc ks x."""
     law = wired_law(net)
-    names = ["s", "theta", "s_dot", "theta_dot"]
+    names = list(PLANT_STATES)
     gains = dict(zip((s.id for s in net.sensors), sensor_constants(net, bench)))
     ks = np.zeros((len(law.inputs), 4))
     for r, sid in enumerate(law.inputs):

@@ -9,6 +9,7 @@ from rich.console import Console
 from rich.table import Table
 
 from patchgen.design.lqg import design_on
+from patchgen.plant.cart_pendulum import UNCERTAIN
 from patchgen.studies.sweep import sweep
 
 from . import cli
@@ -22,7 +23,8 @@ def _db(x):
 
 @cli.command("sweep")
 @click.argument("spec")
-@click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters to vary, comma-separated.")
+@click.option("--vary", default=",".join(UNCERTAIN), show_default=True,
+              help="Parameters to vary, comma-separated.")
 @click.option("--by", "by_text", default="10%", show_default=True, help="Relative change, e.g. 10%.")
 @click.option("--workers", default=0, type=click.IntRange(0, 64), help="Processes (0: one per core).")
 @click.option("--scenario", "scenario_path", default="offset-10deg", show_default=True,

@@ -12,7 +12,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from patchgen.inputs.spec import MEASURED, DesignSpec
-from patchgen.plant.equations import PlantParams, linear_matrices
+from patchgen.plant.equations import PLANT_STATES, PlantParams, linear_matrices
 
 
 @dataclass(frozen=True)
@@ -39,8 +39,7 @@ class LinearModel:
 
 def plant_params(spec: DesignSpec) -> PlantParams:
     """The spec's plant figures as the plant equations take them."""
-    p = spec.plant
-    return PlantParams(M=p.M, m=p.m, l=p.l, g=p.g, b_VF=p.b_VF, c=p.c, d=p.d)
+    return PlantParams(**spec.plant.model_dump())
 
 
 def build_model(spec: DesignSpec, plant: PlantParams | None = None) -> LinearModel:
@@ -92,7 +91,7 @@ def plant_zeros(spec: DesignSpec, output: str) -> np.ndarray:
     """Finite transmission zeros of output/F_U for the 4-state plant (eq. 2.28)."""
     Ap, Bp = linear_matrices(plant_params(spec))
     C = np.zeros((1, 4))
-    C[0, ["s", "theta", "s_dot", "theta_dot"].index(output)] = 1.0
+    C[0, PLANT_STATES.index(output)] = 1.0
     return _sorted(transmission_zeros(Ap, Bp, C))
 
 

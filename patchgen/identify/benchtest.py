@@ -20,6 +20,7 @@ from patchgen.identify.figures import (
     ASSUMED_DISTANCE_UNCERTAINTY_M,
     ASSUMED_TIME_UNCERTAINTY_S,
 )
+from patchgen.plant.compiled import plant_vector
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
@@ -152,7 +153,7 @@ def bench_test_files(plant: PlantParams, bench: BenchProfile, machine: MachinePr
     hold = int(round(1.0 / dt))
     tip = _held(r, n - hold, dist.tip_force_N_rms, dist.bandwidth_Hz, fine)
     theta = np.empty(tip.size + 1)
-    p = np.array([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c, plant.d / 2])
+    p = plant_vector(plant)
     motion.swing(p, math.pi + math.radians(SWING_ANGLE_DEG), fine, tip, theta)
     phi = np.concatenate([np.full(hold, math.radians(SWING_ANGLE_DEG)), theta[:-1:FINE_STEPS] - math.pi])
     files["free-swing.csv"] = _csv("free_swing", ("t_s", "theta_V"), [

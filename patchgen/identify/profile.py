@@ -13,6 +13,7 @@ from patchgen.identify.identify import MIN_LAG_S, Identification, Parameter
 from patchgen.identify.plausible import field_bounds
 from patchgen.inputs.spec import PlantSpec
 from patchgen.inputs.validation import validate
+from patchgen.plant.cart_pendulum import PARAMETER_NAMES, UNCERTAIN
 from patchgen.profiles.bench import BenchActuator, BenchProfile, BenchSensors, check_bench
 from patchgen.profiles.uncertainty import RANGE_FIELDS as RANGED_FIELDS
 
@@ -23,7 +24,7 @@ RANGED = {"actuator.K_U": "K_U", "actuator.tau": "tau", "actuator.dead_zone_V": 
           "sensors.noise_V_rms.s_dot": "noise_V_rms.s_dot"}
 
 SIGNIFICANT = 6
-PLANT_ORDER = ("M", "m", "l", "g", "b_VF", "c", "d")
+PLANT_ORDER = PARAMETER_NAMES  # the [plant] table's order (patchgen.plant.cart_pendulum)
 
 
 def _num(x: float) -> str:
@@ -168,7 +169,7 @@ def plant_toml(result: Identification, sources: list[str]) -> str:
         TOML text; a comment names any parameter no recording gave (the spec must supply it).
     """
     p = result.plant
-    missing = [k for k in ("M", "m", "l", "b_VF", "c") if k not in p]
+    missing = [k for k in UNCERTAIN if k not in p]
     out = ["# The plant identified by patchgen identify from " + ", ".join(sources) + ".",
            "# Paste the [plant] table into a spec; intervals are 95 %."]
     if missing:

@@ -11,14 +11,15 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, PrivateAttr
+from pydantic import Field, PrivateAttr, create_model
 
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded, zero_or_at_least
 from patchgen.inputs.resources import resolve
 from patchgen.inputs.validation import read_toml, validate
+from patchgen.plant.cart_pendulum import PARAMETERS, STATE_NAMES
 
-PLANT_STATES = ("s", "theta", "s_dot", "theta_dot")
+PLANT_STATES = STATE_NAMES  # s, theta, s_dot, theta_dot (patchgen.plant.cart_pendulum)
 MEASURED = ("s", "theta", "s_dot")
 
 # weights: Q entries and R within WEIGHT_RANGE (a weight is relative, and a spread of more than
@@ -38,16 +39,12 @@ Entry = Annotated[Real, Field(ge=-NOISE_MAX, le=NOISE_MAX)]
 Weight = Annotated[Real, Field(ge=-WEIGHT_RANGE[1], le=WEIGHT_RANGE[1])]
 
 
-class PlantSpec(InputModel):
-    """Table B.1 parameters, SI units, within the bounds of a bench-sized cart and pendulum."""
-
-    M: Real = bounded(0.01, 100, description="cart mass, kg (10 g to 100 kg)")
-    m: Real = bounded(1e-3, 10, description="pendulum mass, kg (1 g to 10 kg)")
-    l: Real = bounded(0.01, 10, description="effective pendulum length, m (1 cm to 10 m)")
-    g: Real = bounded(1, 30, default=9.807, description="gravity, m/s^2 (the Moon's 1.6 to Jupiter's 25)")
-    b_VF: Real = bounded(0, 1000, description="cart viscous friction, kg/s")
-    c: Real = bounded(0, 10, description="pendulum rotational friction, kg m^2/s")
-    d: Real = bounded(0.05, 20, default=1.090, description="usable track length between the switches, m")
+PlantSpec = create_model(
+    "PlantSpec", __base__=InputModel, __module__=__name__,
+    __doc__="Table B.1 parameters, SI units, within the bounds of a bench-sized cart and pendulum: "
+            "one field per parameter of the plant model (patchgen.plant.cart_pendulum.PARAMETERS).",
+    **{p.name: (Real, bounded(p.lo, p.hi, description=p.what, **({} if p.default is None else {"default": p.default})))
+       for p in PARAMETERS})
 
 
 SENSOR_RANGE = (1e-3, 1e3)  # V per SI unit: a millivolt to a kilovolt per metre, radian, m/s

@@ -35,7 +35,7 @@ from patchgen.design.lqg import Design
 from patchgen.design.model import plant_params
 from patchgen.patch import large_gains
 from patchgen.patch.realization import Block, Realization, Term
-from patchgen.plant.equations import linear_matrices
+from patchgen.plant.equations import PLANT_STATES, linear_matrices
 from patchgen.profiles.machine import MachineProfile
 
 FORMS = ("modal", "observer", "balanced")
@@ -126,7 +126,7 @@ def scaling_plants(design: Design) -> list[tuple[np.ndarray, np.ndarray, np.ndar
     if len(keep) > 4:
         Ap, Bp = linear_matrices(plant_params(design.spec))
         Cp = np.zeros((len(model.measured), 4))
-        names = ["s", "theta", "s_dot", "theta_dot"]
+        names = list(PLANT_STATES)
         for r, m in enumerate(model.measured):
             Cp[r, names.index(m)] = 1.0
         out.append((Ap, Bp, Cp, names))

@@ -24,10 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from patchgen.design.lqg import Design
+from patchgen.plant.cart_pendulum import STATE_UNITS as PLANT_UNITS
 from patchgen.profiles.machine import MachineProfile
 
-STATE_UNITS = {"s": "m", "theta": "rad", "s_dot": "m/s", "theta_dot": "rad/s", "int_s": "m s",
-               "int_theta": "rad s", "actuator": "N"}
+STATE_UNITS = {**PLANT_UNITS, "int_s": "m s", "int_theta": "rad s", "actuator": "N"}
 SENSOR_UNITS = {k: STATE_UNITS[k] for k in ("s", "theta", "s_dot")}
 SENSOR_LABELS = {"s": "cart position pot", "theta": "pendulum angle pot", "s_dot": "motor tachometer"}
 

@@ -19,6 +19,12 @@ _JIT = {"cache": True, "error_model": "numpy"}
 
 PLANT_VECTOR = ("M", "m", "l", "g", "b_VF", "c", "half_track")  # a plant as the compiled loops take it
 P_HALF_TRACK = PLANT_VECTOR.index("half_track")  # where the limit switches are (d/2)
+VECTOR_PARAMETERS = ("M", "m", "l", "g", "b_VF", "c", "d")  # the PlantParams field behind each entry
+
+
+def plant_vector(plant) -> np.ndarray:
+    """A PlantParams as the compiled loops take it (PLANT_VECTOR: the track's half length last)."""
+    return np.array([getattr(plant, k) for k in VECTOR_PARAMETERS[:-1]] + [plant.d / 2], dtype=np.float64)
 
 _TWO_OVER_PI = 2.0 / math.pi
 _PIO2_A = math.ldexp(math.floor(math.ldexp(math.pi / 2, 30)), -30)  # 31 bits: k * _PIO2_A exact

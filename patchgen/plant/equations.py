@@ -10,7 +10,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-PLANT_STATES = ("s", "theta", "s_dot", "theta_dot")
+from patchgen.plant.cart_pendulum import STATE_NAMES
+
+PLANT_STATES = STATE_NAMES  # s, theta, s_dot, theta_dot (patchgen.plant.cart_pendulum)
 
 
 @dataclass(frozen=True)

@@ -11,8 +11,9 @@ from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.spice.elements import SMOOTHING, DeckLines, clamp, dead_zone, num, state_integrator
 
-# Plant state nodes, in PLANT_STATES order; their voltages are the states in SI units.
-STATE_NODES = {"s": "x_s", "theta": "x_theta", "s_dot": "x_sdot", "theta_dot": "x_thetadot"}
+# Plant state nodes, in PLANT_STATES order (x_s, x_theta, x_sdot, x_thetadot); their voltages are
+# the states in SI units.
+STATE_NODES = {k: "x_" + k.replace("_", "") for k in PLANT_STATES}
 FORCE_NODE = "f_cart"
 S_REF_NODE = "s_ref"  # the cart-position reference a step disturbance moves
 EDGE_S = 1e-6  # s: the rise and fall of a push or step in the deck (the simulator's are sharp)

@@ -14,10 +14,11 @@ from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
 from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.build import build_patch
+from patchgen.plant.cart_pendulum import UNCERTAIN
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
-VARIABLE = ("M", "m", "l", "b_VF", "c", "g")  # the plant parameters a sweep may vary (PlantParams.scaled)
+VARIABLE = UNCERTAIN + ("g",)  # the plant parameters a sweep may vary (PlantParams.scaled): gravity too
 PARALLEL_FROM = 4  # rows from which a process pool pays for its start-up
 
 

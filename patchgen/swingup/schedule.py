@@ -22,13 +22,14 @@ import numba as nb
 import numpy as np
 from scipy.optimize import minimize
 
-from patchgen.plant.compiled import N_COEF, plant_accel, plant_coefficients, sincos
+from patchgen.plant.cart_pendulum import UNCERTAIN
+from patchgen.plant.compiled import N_COEF, plant_accel, plant_coefficients, plant_vector, sincos
 from patchgen.plant.equations import PlantParams
 from patchgen.swingup.handoff import Zone, wrapped
 from patchgen.swingup.pumping import HOLD_S, PUMP_T_MAX_S, STEP_S, SwingUpResult, saturated_state_feedback, simulate
 from patchgen.swingup.strategies import Schedule, ScheduleReplay, Switch, hanging_state
 
-PARAMETERS = ("M", "m", "l", "b_VF", "c")
+PARAMETERS = UNCERTAIN  # the plant's physical parameters (patchgen.plant.cart_pendulum)
 # how far each parameter is put off in the robustness runs: the thesis asks for experiment because
 # its figures are uncertain (3.5, "plant model inaccuracies"); 10 % is assumed, not a thesis figure
 PARAMETER_ERROR = 0.10
@@ -79,7 +80,7 @@ def _batch_terminal(
     The optimiser calls this hundreds of times, so the loop is compiled (the plant's equations are
     the engine's, eq. 2.16-2.19).
     """
-    p = np.array([plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c], dtype=float)
+    p = plant_vector(plant)
     return _terminal_kernel(p, np.ascontiguousarray(starts, dtype=float), np.asarray(forces, dtype=float),
                             np.asarray(T_F, dtype=float), float(h), hanging_state().astype(float))
 

@@ -1,0 +1,64 @@
+"""The cart-pendulum as a plant model describes itself: its states, its parameters (unit, physical
+bounds, default, meaning) and the roles a few of them play for the layers above.
+
+Every other layer asks this module for the plant's state names, units and parameter lists (the
+spec's [plant] table is built from PARAMETERS, the bench's spread and the swing-up's sensitivity
+take their names from here), so that the plant is said once. The equations are
+patchgen.plant.equations (numpy) and patchgen.plant.compiled (numba), checked against each other
+by the tests.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class State:
+    """One state of the plant: its name, SI unit and what it is."""
+
+    name: str
+    unit: str
+    what: str
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One physical parameter: name, SI unit, inclusive physical bounds, default (None: required),
+    what it is (with its bounds' reason), and whether it is a physical property of the bench that
+    a sweep or a sensitivity study may put off (gravity and the track's length are not)."""
+
+    name: str
+    unit: str
+    lo: float
+    hi: float
+    default: float | None
+    what: str
+    uncertain: bool = True
+
+
+STATES = (
+    State("s", "m", "cart position, from the track's centre"),
+    State("theta", "rad", "pendulum angle from upright"),
+    State("s_dot", "m/s", "cart velocity"),
+    State("theta_dot", "rad/s", "pendulum angular velocity"),
+)
+STATE_NAMES = tuple(s.name for s in STATES)
+STATE_UNITS = {s.name: s.unit for s in STATES}
+
+POSITION = "s"  # the state the limit switches and a step command act on
+ANGLE = "theta"  # the state whose excursion past the fall angle ends a run
+RATE_OF = {"s": "s_dot", "theta": "theta_dot"}  # each position-like state's rate
+
+# Table B.1's parameters, within the bounds of a bench-sized cart and pendulum (docs/spec.md)
+PARAMETERS = (
+    Parameter("M", "kg", 0.01, 100, None, "cart mass, kg (10 g to 100 kg)"),
+    Parameter("m", "kg", 1e-3, 10, None, "pendulum mass, kg (1 g to 10 kg)"),
+    Parameter("l", "m", 0.01, 10, None, "effective pendulum length, m (1 cm to 10 m)"),
+    Parameter("g", "m/s^2", 1, 30, 9.807, "gravity, m/s^2 (the Moon's 1.6 to Jupiter's 25)", uncertain=False),
+    Parameter("b_VF", "kg/s", 0, 1000, None, "cart viscous friction, kg/s"),
+    Parameter("c", "kg m^2/s", 0, 10, None, "pendulum rotational friction, kg m^2/s"),
+    Parameter("d", "m", 0.05, 20, 1.090, "usable track length between the switches, m", uncertain=False),
+)
+PARAMETER_NAMES = tuple(p.name for p in PARAMETERS)
+UNCERTAIN = tuple(p.name for p in PARAMETERS if p.uncertain)  # what a sweep or a sensitivity may put off

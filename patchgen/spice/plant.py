@@ -7,6 +7,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from patchgen.inputs.scenario import Disturbance
+from patchgen.plant.behavioural import accelerations
 from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.spice.elements import SMOOTHING, DeckLines, clamp, dead_zone, num, state_integrator
@@ -79,16 +80,12 @@ def cart_pendulum(d: DeckLines, plant: PlantParams, x0: Sequence[float], push: d
     """Eq. 2.16-2.19 with theta_dot^2 in the centripetal term (as patchgen.plant.equations.nonlinear_rhs),
     with the pushes of the scenario on the cart and, at distance l, on the pendulum tip
     (generalised forces F_tip on s and F_tip l cos(theta) on theta, as the simulator's)."""
-    M, m, l, g, b, c = (num(v) for v in (plant.M, plant.m, plant.l, plant.g, plant.b_VF, plant.c))
-    th, sd, thd = (f"v({STATE_NODES[k]})" for k in ("theta", "s_dot", "theta_dot"))
+    th, sd, thd = (f"v({STATE_NODES[k]})" for k in PLANT_STATES[1:])
     d.comment(f"Cart-pendulum, eq. 2.16-2.19: M {plant.M} kg, m {plant.m} kg, l {plant.l} m, "
               f"b_VF {plant.b_VF} kg/s, c {plant.c} kg m^2/s")
-    cart = f" + {push['cart']}" if push["cart"] else ""
-    tip_s = f" + ({push['tip']})*sin({th})*sin({th})" if push["tip"] else ""
-    tip_th = f" + ({push['tip']})*cos({th})/({m}*{l})" if push["tip"] else ""
-    d.add(f"B_sdd x_sdd 0 V = (-{b}*{sd} + {m}*{l}*{thd}*{thd}*sin({th}) + ({c}/{l})*{thd}*cos({th})"
-          f" - {m}*{g}*sin({th})*cos({th}) + v({FORCE_NODE}){cart}{tip_s}) / (({M}+{m}) - {m}*cos({th})*cos({th}))",
-          f"B_thdd x_thdd 0 V = -({c}/({m}*{l}*{l}))*{thd} + ({g}/{l})*sin({th}){tip_th} - cos({th})*v(x_sdd)/{l}")
+    force = f"v({FORCE_NODE})" + (f" + {push['cart']}" if push["cart"] else "")
+    sdd, thdd = accelerations(plant, num, th, sd, thd, force, push["tip"], "v(x_sdd)")
+    d.add(f"B_sdd x_sdd 0 V = {sdd}", f"B_thdd x_thdd 0 V = {thdd}")
     x0 = dict(zip(PLANT_STATES, x0))
     state_integrator(d, STATE_NODES["s"], sd, x0["s"])
     state_integrator(d, STATE_NODES["theta"], thd, x0["theta"])

@@ -33,7 +33,6 @@ KNOWN: dict[str, tuple[int, str]] = {  # module -> (how many, where they belong)
     "profiles/bench.py": (1, SENSORS),
     "bench/files.py": (1, "history columns' units: the plant's STATE_UNITS"),
     "spice/compare.py": (1, "plotted units: the plant's STATE_UNITS"),
-    "spice/plant.py": (1, "the equations as SPICE sources: into patchgen/plant/"),
     "studies/robust.py": (1, "the weight grid per state: from the plant's states"),
 }
 

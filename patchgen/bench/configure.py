@@ -31,7 +31,7 @@ from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
-SPREAD_ORDER = VECTOR_PARAMETERS  # PLANT_VECTOR's parameters (d: half track)
+SPREAD_ORDER = tuple(k for k in VECTOR_PARAMETERS if k != "J")  # the plant vector's first parameters (d: half track)
 
 
 def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,

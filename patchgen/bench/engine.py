@@ -65,8 +65,9 @@ class EngineConfig:
     noise: Noise  # per channel: the sensors, then the amplifiers
     wiring: Wiring
     disturbances: Disturbances
-    plant: np.ndarray  # PLANT_VECTOR of patchgen.plant.compiled: M, m, l, g, b_VF, c, half track
-    plant_spread: np.ndarray  # per plant parameter: each run draws it uniformly within +/- this fraction
+    plant: np.ndarray  # PLANT_VECTOR of patchgen.plant.compiled: M, m, l, g, b_VF, c, half track, J
+    plant_spread: np.ndarray  # per plant parameter (the plant vector's first ones, configure.SPREAD_ORDER): each
+    # run draws it uniformly within +/- this fraction
     actuator: np.ndarray  # ACTUATOR_VECTOR of patchgen.bench.lanes: K_U, tau, dead zone, force limit
     bench_spread: bench_spread.BenchSpread | None = None  # each run's bench drawn from these ranges
 
@@ -177,7 +178,8 @@ def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]) -> Draws:
         signs[r] = np.where(rng.random(n_amp) < 0.5, 1.0, -1.0)
         keys[r] = rng.integers(0, 2**32, size=2, dtype=np.uint64)
         if spread:
-            plants[r] *= 1.0 + cfg.plant_spread * rng.uniform(-1.0, 1.0, cfg.plant.shape[0])
+            n = cfg.plant_spread.shape[0]  # the first n of the plant vector
+            plants[r, :n] *= 1.0 + cfg.plant_spread * rng.uniform(-1.0, 1.0, n)
         if bench is not None:
             bench_spread.apply(bench, bench_spread.draw(bench, rng), actuators[r], gains[r], noise_std[r])
     return Draws(keys=keys, signs=signs, plants=plants, actuators=actuators, sensor_gains=gains,
@@ -262,7 +264,7 @@ def drawn(cfg: EngineConfig, draws: Draws) -> list[tuple[tuple[str, float], ...]
     """Each run's drawn parameters, (name, value) in a fixed order: the plant's parameters that
     --spread varies (by name), then the bench's ranges (by their [uncertainty] key). Empty tuples
     when nothing is drawn."""
-    varied = [(i, name) for i, name in enumerate(PLANT_VECTOR) if cfg.plant_spread[i] != 0]
+    varied = [(i, PLANT_VECTOR[i]) for i in range(cfg.plant_spread.shape[0]) if cfg.plant_spread[i] != 0]
     spread = cfg.bench_spread
     out = []
     for r in range(draws.plants.shape[0]):

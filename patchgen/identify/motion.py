@@ -19,6 +19,11 @@ from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchActuator
 
 _JIT = {"cache": True, "error_model": "numpy"}
+# numba stamps this file's cache with this file alone; plant/compiled.py's functions are compiled
+# into it, so its digest is kept here (first 16 hex digits of sha256): a change there changes this
+# file (tests/bench/test_kernel.py says when it is out of date)
+COMPILED_FILES = ("plant/compiled.py",)
+COMPILED_IN = "dcb6a665d63b981b"
 
 
 def coloured(rng: np.random.Generator, rms: float, bandwidth_Hz: float, dt: float, n: int) -> np.ndarray:

@@ -54,11 +54,14 @@ RATE_OF = {"s": "s_dot", "theta": "theta_dot"}  # each position-like state's rat
 PARAMETERS = (
     Parameter("M", "kg", 0.01, 100, None, "cart mass, kg (10 g to 100 kg)"),
     Parameter("m", "kg", 1e-3, 10, None, "pendulum mass, kg (1 g to 10 kg)"),
-    Parameter("l", "m", 0.01, 10, None, "effective pendulum length, m (1 cm to 10 m)"),
+    Parameter("l", "m", 0.01, 10, None, "pivot to the pendulum's centre of mass, m (1 cm to 10 m; a point "
+              "mass's length)"),
     Parameter("g", "m/s^2", 1, 30, 9.807, "gravity, m/s^2 (the Moon's 1.6 to Jupiter's 25)", uncertain=False),
     Parameter("b_VF", "kg/s", 0, 1000, None, "cart viscous friction, kg/s"),
     Parameter("c", "kg m^2/s", 0, 10, None, "pendulum rotational friction, kg m^2/s"),
     Parameter("d", "m", 0.05, 20, 1.090, "usable track length between the switches, m", uncertain=False),
+    Parameter("J", "kg m^2", 0, 10, 0.0, "pendulum's moment of inertia about its centre of mass, kg m^2 (0: a point "
+              "mass, as the thesis's; a rod of length L: m L^2 / 12)", uncertain=False),  # not yet swept or fitted
 )
 PARAMETER_NAMES = tuple(p.name for p in PARAMETERS)
 UNCERTAIN = tuple(p.name for p in PARAMETERS if p.uncertain)  # what a sweep or a sensitivity may put off

@@ -17,14 +17,15 @@ import numpy as np
 # cached on disk; IEEE arithmetic, no Python exceptions for x / 0 (as patchgen.bench.kernel's)
 _JIT = {"cache": True, "error_model": "numpy"}
 
-PLANT_VECTOR = ("M", "m", "l", "g", "b_VF", "c", "half_track")  # a plant as the compiled loops take it
+PLANT_VECTOR = ("M", "m", "l", "g", "b_VF", "c", "half_track", "J")  # a plant as the compiled loops take it
 P_HALF_TRACK = PLANT_VECTOR.index("half_track")  # where the limit switches are (d/2)
-VECTOR_PARAMETERS = ("M", "m", "l", "g", "b_VF", "c", "d")  # the PlantParams field behind each entry
+P_J = PLANT_VECTOR.index("J")
+VECTOR_PARAMETERS = ("M", "m", "l", "g", "b_VF", "c", "d", "J")  # the PlantParams field behind each entry
 
 
 def plant_vector(plant) -> np.ndarray:
-    """A PlantParams as the compiled loops take it (PLANT_VECTOR: the track's half length last)."""
-    return np.array([getattr(plant, k) for k in VECTOR_PARAMETERS[:-1]] + [plant.d / 2], dtype=np.float64)
+    """A PlantParams as the compiled loops take it (PLANT_VECTOR: d as the track's half length)."""
+    return np.array([plant.d / 2 if k == "d" else getattr(plant, k) for k in VECTOR_PARAMETERS], dtype=np.float64)
 
 _TWO_OVER_PI = 2.0 / math.pi
 _PIO2_A = math.ldexp(math.floor(math.ldexp(math.pi / 2, 30)), -30)  # 31 bits: k * _PIO2_A exact
@@ -58,30 +59,34 @@ def sincos(x):
     return (-sn if q & 2 else sn), (-cs if (q + 1) & 2 else cs)
 
 
-N_COEF = 10  # per-plant constants of eq. 2.16-2.19 (plant_coefficients)
+N_COEF = 11  # per-plant constants of eq. 2.16-2.19 (plant_coefficients)
 
 
 @nb.njit(inline="always", **_JIT)
 def plant_coefficients(p, out):
-    """The per-run constants of eq. 2.16-2.19 from p = (M, m, l, g, b_VF, c, ...), into out."""
+    """The per-run constants of eq. 2.16-2.19 from p (PLANT_VECTOR), into out: with the swing
+    length L = l + J/(m l) and r = l/L as patchgen.plant.equations has them (J = 0: the thesis's)."""
     M, m, l, g, b, c = p[0], p[1], p[2], p[3], p[4], p[5]
-    out[0], out[1], out[2], out[3], out[4] = M + m, m, m * l, c / l, m * g
-    out[5], out[6], out[7], out[8], out[9] = b, -c / (m * l * l), g / l, 1.0 / (m * l), 1.0 / l
+    L = l + p[P_J] / (m * l)
+    r = l / L
+    out[0], out[1], out[2], out[3], out[4] = M + m, m * r, m * l, c / L, m * g * r
+    out[5], out[6], out[7], out[8], out[9] = b, -c / (m * l * L), g / L, 1.0 / (m * L), 1.0 / L
+    out[10] = 1.0 - r
 
 
 @nb.njit(inline="always", **_JIT)
 def plant_accel(q, i, sn, cs, sd, thd, force, tip):
     """(s_ddot, theta_ddot) of eq. 2.16-2.19 with coefficients q[:, i], plus a horizontal force at
-    the pendulum tip (distance l): generalised forces tip on s and tip * l * cos(theta) on theta."""
+    distance l on the pendulum: generalised forces tip on s and tip * l * cos(theta) on theta."""
     den = q[0, i] - q[1, i] * cs * cs
     bracket = -q[5, i] * sd + q[2, i] * thd * thd * sn + q[3, i] * thd * cs - q[4, i] * sn * cs + force
-    sdd = (bracket + tip * sn * sn) / den
+    sdd = (bracket + (tip * sn * sn + tip * q[10, i] * cs * cs)) / den  # q[10] = 1 - r: 0 for a point mass
     return sdd, q[6, i] * thd + q[7, i] * sn + tip * cs * q[8, i] - cs * sdd * q[9, i]
 
 
 @nb.njit(**_JIT)
 def plant_rhs(p, th, sd, thd, force, tip_force):
-    """(ds, dtheta, ds_dot, dtheta_dot) as the kernel computes them (p = M, m, l, g, b_VF, c)."""
+    """(ds, dtheta, ds_dot, dtheta_dot) as the kernel computes them (p: PLANT_VECTOR)."""
     q = np.empty((N_COEF, 1))
     plant_coefficients(p, q[:, 0])
     sn, cs = sincos(th)

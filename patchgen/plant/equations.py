@@ -2,6 +2,13 @@
 
 States in SI units: s (m), theta (rad, 0 = upright), s_dot (m/s), theta_dot (rad/s).
 Input: the force F_U on the cart (N).
+
+The pendulum is a rigid body: mass m, centre of mass at l from the pivot, moment of inertia J
+about it (the thesis's point mass is J = 0). With I = J + m l^2 about the pivot, the equations of
+motion are (M + m) s'' + m l cos(theta) theta'' - m l sin(theta) theta'^2 = F - b_VF s' and
+I theta'' + m l cos(theta) s'' - m g l sin(theta) = -c theta'. They are written with the swing
+length L = I / (m l) = l + J / (m l) and r = l / L, so that J = 0 (L = l, r = 1) takes exactly the
+thesis's floating-point operations.
 """
 
 from __future__ import annotations
@@ -33,6 +40,8 @@ class PlantParams:
         Pendulum pivot friction (N m s).
     d : float
         Track length between the limit switches (m).
+    J : float
+        The pendulum's moment of inertia about its centre of mass (kg m^2); 0 for a point mass.
     """
 
     M: float
@@ -42,6 +51,11 @@ class PlantParams:
     b_VF: float
     c: float
     d: float
+    J: float = 0.0
+
+    def swing_length(self) -> float:
+        """L = I / (m l) = l + J / (m l): the length of the point mass that swings as this pendulum."""
+        return self.l + self.J / (self.m * self.l)
 
     def scaled(self, **factors: float) -> PlantParams:
         """A copy with named parameters multiplied by the given factors (for sweeps).
@@ -75,15 +89,18 @@ def linear_matrices(p: PlantParams) -> tuple[np.ndarray, np.ndarray]:
         Input matrix for the cart force F_U (N).
     """
     M, m, l, g, b, c = p.M, p.m, p.l, p.g, p.b_VF, p.c
+    L = p.swing_length()
+    r = l / L
+    den = M + m * (1.0 - r)  # M for a point mass
     A = np.array(
         [
             [0.0, 0.0, 1.0, 0.0],
             [0.0, 0.0, 0.0, 1.0],
-            [0.0, -m * g / M, -b / M, c / (M * l)],
-            [0.0, (M + m) * g / (M * l), b / (M * l), -(M + m) * c / (M * m * l * l)],
+            [0.0, -m * g * r / den, -b / den, c / (den * L)],
+            [0.0, (den + m * r) * g / (den * L), b / (den * L), -(den + m * r) * c / (den * m * l * L)],
         ]
     )
-    B = np.array([[0.0], [0.0], [1.0 / M], [-1.0 / (M * l)]])
+    B = np.array([[0.0], [0.0], [1.0 / den], [-1.0 / (den * L)]])
     return A, B
 
 
@@ -108,10 +125,12 @@ def nonlinear_rhs(p: PlantParams, x: np.ndarray, force: float | np.ndarray) -> n
         dx/dt, shaped like ``x``.
     """
     M, m, l, g, b, c = p.M, p.m, p.l, p.g, p.b_VF, p.c
+    L = p.swing_length()
+    r = l / L
     _, th, sd, thd = x[0], x[1], x[2], x[3]
     sin, cos = np.sin(th), np.cos(th)
-    den = (M + m) - m * cos * cos
-    bracket = -b * sd + m * l * thd * thd * sin + (c / l) * thd * cos - m * g * sin * cos + force
+    den = (M + m) - m * cos * cos * r
+    bracket = -b * sd + m * l * thd * thd * sin + (c / L) * thd * cos - m * g * sin * cos * r + force
     sdd = bracket / den
-    thdd = -c / (m * l * l) * thd + g / l * sin - cos * sdd / l
+    thdd = -c / (m * l * L) * thd + g / L * sin - cos * sdd / L
     return np.array([sd, thd, sdd, thdd])

@@ -111,7 +111,7 @@ def default_spread(plant: PlantParams) -> np.ndarray:
     """Half-widths of the sampling box: half the track, SAMPLED_ANGLE_RAD, and the speeds these
     imply at the pendulum's natural frequency."""
     half_track = plant.d / 2.0
-    omega = np.sqrt(plant.g / plant.l)
+    omega = np.sqrt(plant.g / plant.swing_length())
     theta = SAMPLED_ANGLE_RAD
     return np.array([half_track, theta, half_track * omega, theta * omega])
 

@@ -43,8 +43,9 @@ TRACK_MARGIN = 0.9  # the guard brakes when the stopping point would pass this f
 
 
 def pendulum_energy(plant: PlantParams, x: np.ndarray) -> np.ndarray | float:
-    """Pendulum energy in the cart frame (J): kinetic about the pivot plus potential (0 = level)."""
-    return 0.5 * plant.m * plant.l**2 * x[3] ** 2 + plant.m * plant.g * plant.l * np.cos(x[1])
+    """Pendulum energy in the cart frame (J): kinetic about the pivot, I = m l L (J + m l^2, L the
+    swing length), plus potential (0 = level)."""
+    return 0.5 * plant.m * (plant.l * plant.swing_length()) * x[3] ** 2 + plant.m * plant.g * plant.l * np.cos(x[1])
 
 
 def upright_energy(plant: PlantParams) -> float:

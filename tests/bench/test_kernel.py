@@ -5,6 +5,7 @@ but its own draws (not its block, its place in it, the threads)."""
 from __future__ import annotations
 
 import hashlib
+import importlib
 import math
 import os
 import subprocess
@@ -140,17 +141,30 @@ def test_a_run_is_the_same_in_any_block_and_on_any_number_of_threads():
     np.testing.assert_array_equal(alone.history, full.history)
 
 
-def test_the_kernel_names_the_code_compiled_into_it():
-    """numba's cache of patchgen/bench/kernel.py is stamped with that file alone: a change in a
-    file whose functions are compiled into it must change it too, through kernel.COMPILED_IN."""
+@pytest.mark.parametrize("module", ["patchgen.bench.kernel", "patchgen.identify.motion", "patchgen.swingup.schedule"])
+def test_the_kernel_names_the_code_compiled_into_it(module):
+    """numba's cache of a compiled module is stamped with that file alone: a change in a file whose
+    functions are compiled into it must change it too, through its COMPILED_IN. Every module that
+    compiles the plant's equations (patchgen/plant/compiled.py) carries one."""
+    mod = importlib.import_module(module)
     package = Path(kernel.__file__).parents[1]
-    assert set(kernel.COMPILED_FILES) == {"bench/lanes.py", "bench/noise.py", "plant/compiled.py"}
+    assert "plant/compiled.py" in mod.COMPILED_FILES
     digest = hashlib.sha256()
-    for name in kernel.COMPILED_FILES:
+    for name in mod.COMPILED_FILES:
         digest.update((package / name).read_bytes())
-    assert kernel.COMPILED_IN == digest.hexdigest()[:16], (
-        f"{', '.join(kernel.COMPILED_FILES)} changed: set COMPILED_IN = {digest.hexdigest()[:16]!r} "
-        "in patchgen/bench/kernel.py")
+    assert mod.COMPILED_IN == digest.hexdigest()[:16], (
+        f"{', '.join(mod.COMPILED_FILES)} changed: set COMPILED_IN = {digest.hexdigest()[:16]!r} "
+        f"in {module.replace('.', '/')}.py")
+
+
+def test_every_module_compiling_the_plant_names_it():
+    """A module that imports the compiled plant is among those the test above checks."""
+    package = Path(kernel.__file__).parents[1]
+    users = {str(p.relative_to(package.parent).with_suffix("")).replace("/", ".") for p in package.rglob("*.py")
+             if "from patchgen.plant.compiled import" in p.read_text() and "nb.njit" in p.read_text()}
+    assert users == {"patchgen.bench.kernel", "patchgen.bench.lanes", "patchgen.identify.motion",
+                     "patchgen.swingup.schedule"}
+    assert "bench/lanes.py" in kernel.COMPILED_FILES  # lanes is compiled into the kernel, which names it
 
 
 def test_compile_notice_only_when_numba_will_compile(tmp_path):

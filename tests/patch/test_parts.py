@@ -9,6 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from patchgen.design.lqg import design_on
+from patchgen.design.model import plant_params
 from patchgen.inputs.spec import load_spec
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist, wire_list
@@ -43,7 +44,7 @@ def test_bench_recommended_differentiator_parts():
     # the wire list routes the cord through both parts, and the deck builds them at their values
     wires = wire_list(net)
     assert ("theta sensor", "C1 (1 µF (E12))") in wires and ("C1", "R1 (6.34 kΩ (E96))") in wires
-    deck = spice_deck(net, d.spec.plant, load_bench("uw-1991"), GP6, SpiceSettings(1.0, 0.01, (0, 0.1, 0, 0)))
+    deck = spice_deck(net, plant_params(d.spec), load_bench("uw-1991"), GP6, SpiceSettings(1.0, 0.01, (0, 0.1, 0, 0)))
     assert "C_a5_x1a sens_theta a5_x1a_m 1e-06" in deck.text
     assert f"R_a5_x1a_s a5_x1a_m a5_sj {r.value:.6g}"[:34] in deck.text
 

@@ -43,12 +43,11 @@ def test_numpy_compiled_and_spice_forms_agree(seed):
         plant = _plant(rng)
         th, sd, thd = rng.uniform(-3, 3), rng.uniform(-2, 2), rng.uniform(-10, 10)
         force, tip = rng.uniform(-20, 20), rng.uniform(-2, 2) if rng.random() < 0.5 else 0.0
-        # the tip push by hand: generalised forces tip on s and tip l cos(theta) on theta, i.e. the
-        # numpy form with the push on the cart plus tip cos(theta)/(m l) more on theta_ddot after
-        # eliminating: solve the 2x2 mass matrix with both generalised forces
+        # the push by hand: generalised forces tip on s and tip l cos(theta) on theta through the
+        # mass matrix [[M + m, m l cos], [m l cos, J + m l^2]], added to the numpy form's
         M, m, l = plant.M, plant.m, plant.l
         base = nonlinear_rhs(plant, np.array([0.0, th, sd, thd]), force)
-        mass = np.array([[M + m, m * l * math.cos(th)], [m * l * math.cos(th), m * l * l]])
+        mass = np.array([[M + m, m * l * math.cos(th)], [m * l * math.cos(th), m * l * l + plant.J]])
         extra = np.linalg.solve(mass, [tip, tip * l * math.cos(th)])
         want = (base[2] + extra[0], base[3] + extra[1])
         compiled = plant_rhs(plant_vector(plant), th, sd, thd, force, tip)[2:]

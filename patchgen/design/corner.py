@@ -84,7 +84,7 @@ def noise_model(spec: DesignSpec, bench: BenchProfile, model: LinearModel) -> No
     NoiseModel
         What :func:`force_error_rms` drives the loop with.
     """
-    ks = {"s": spec.sensors.s, "theta": spec.sensors.theta, "s_dot": spec.sensors.s_dot}
+    ks = spec.sensors.constants()
     rms = np.array([bench.sensors.noise_V_rms.get(m, 0.0) / ks[m] for m in model.measured])
     dead_zone_rms = bench.actuator.K_U * bench.actuator.dead_zone_V / math.sqrt(3.0)  # uniform over +/-delta
     return NoiseModel(rms, 2 * math.pi * bench.sensors.noise_bandwidth_Hz, dead_zone_rms)

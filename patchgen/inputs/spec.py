@@ -59,6 +59,10 @@ class SensorSpec(InputModel):
     s_dot: Real = bounded(*SENSOR_RANGE, description="V/(m/s)")
     theta_dot: Real | None = bounded(*SENSOR_RANGE, default=None, description="V/(rad/s); default theta x 1 s")
 
+    def constants(self) -> dict[str, float]:
+        """Volts per SI unit of each measured quantity (MEASURED), by name."""
+        return {q: getattr(self, q) for q in MEASURED}
+
 
 MIN_LAG_S = 1e-3  # a lag shorter than 1 ms is a gain to the loop, and would set a needlessly fine step
 

@@ -242,7 +242,7 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
         Blocks ``int`` (the integral part), ``c1``... (the stable part's states) and ``u_c``.
     """
     spec = design.spec
-    ks = {"s": spec.sensors.s, "theta": spec.sensors.theta, "s_dot": spec.sensors.s_dot}
+    ks = spec.sensors.constants()
     y = list(c.inputs)
     KU, T, ref = spec.actuator.K_U, machine.time_scale_s, machine.reference_V
     weights = [float(w) for w in machine.input_weights]

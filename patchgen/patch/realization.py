@@ -79,7 +79,7 @@ class Realization:
 def realize(design: Design, machine: MachineProfile) -> Realization:
     """Scale the design's controller into machine volts (gains through sensor constants and K_U)."""
     spec = design.spec
-    ks = {"s": spec.sensors.s, "theta": spec.sensors.theta, "s_dot": spec.sensors.s_dot}
+    ks = spec.sensors.constants()
     KU = spec.actuator.K_U
     T = machine.time_scale_s
     e = spec.estimator.kind

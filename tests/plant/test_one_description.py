@@ -21,15 +21,13 @@ from patchgen.plant.equations import PlantParams
 PKG = Path(patchgen.__file__).parent
 SENSORS = "the measured set s, theta, s_dot: the bench profile's sensor set (sensors as labs have them)"
 KNOWN: dict[str, tuple[int, str]] = {  # module -> (how many, where they belong)
-    "patch/realization.py": (4, SENSORS),
+    "patch/realization.py": (3, SENSORS),
     "identify/profile.py": (2, SENSORS),
-    "design/corner.py": (1, SENSORS),
     "design/lqg.py": (1, SENSORS),
     "identify/benchtest.py": (1, SENSORS),
     "identify/identify.py": (1, SENSORS),
     "identify/recording.py": (1, "a recording's quantities and units: from the plant's states and the sensor set"),
     "inputs/spec.py": (1, SENSORS),
-    "patch/compensator_forms.py": (1, SENSORS),
     "profiles/bench.py": (1, SENSORS),
     "bench/files.py": (1, "history columns' units: the plant's STATE_UNITS"),
     "spice/compare.py": (1, "plotted units: the plant's STATE_UNITS"),

@@ -9,10 +9,10 @@ from patchgen.bench.simulate import RunSummary, simulate
 from patchgen.inputs.scenario import load_scenario
 from patchgen.patch.netlist import Netlist
 from patchgen.plant.equations import PlantParams
-from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.bench import STANDARD_SCENARIOS, BenchProfile, bench_scenarios
 from patchgen.profiles.machine import MachineProfile
 
-STANDARD = ("offset-10deg", "finger-push", "step-cart", "hold-120s")
+STANDARD = STANDARD_SCENARIOS  # every shipped scenario: a bench's default set (profiles.bench.bench_scenarios)
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,7 @@ class Prediction:
 
 
 def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
-            runs_hold: int = 20, scenarios: tuple[str, ...] = STANDARD,
+            runs_hold: int = 20, scenarios: tuple[str, ...] | None = None,
             done: dict[str, list[RunSummary]] | None = None, bench_spread: bool = False) -> list[Prediction]:
     """Each standard scenario on the bench (noise and drift as the profiles say).
 
@@ -44,8 +44,8 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
         The patch and what it runs on.
     runs_hold : int
         Runs of the hold-120s Monte Carlo.
-    scenarios : tuple of str
-        The scenarios, by name.
+    scenarios : tuple of str, optional
+        The scenarios, by name or path (default: the bench's, profiles.bench.bench_scenarios).
     done : dict of str to list of RunSummary, optional
         Runs already simulated on this patch, bench and machine, by scenario name, from the
         scenario's own seed: run i depends on its seed alone, so their first runs stand in for
@@ -59,8 +59,9 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
         One per scenario, in order.
     """
     out = []
-    for name in scenarios:
-        sc = load_scenario(name)
+    for given in scenarios or bench_scenarios(bench):
+        sc = load_scenario(given)
+        name = sc.name  # a file's stem, or the name it gives itself
         runs = runs_hold if name == "hold-120s" else 1
         if done is not None and len(done.get(name, ())) >= runs:
             summaries = done[name][:runs]

@@ -12,6 +12,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from patchgen.bench.prediction import STANDARD
+from patchgen.profiles.bench import bench_scenarios
 from patchgen.render.outputs import check_out_dir, write_files
 from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.pottable import pot_table
@@ -43,7 +44,7 @@ NONE_CHOSEN_STATUS = 1  # the comparison is written, but no realisation holds on
               help="The most Monte Carlo noise seeds per realisation and scenario.")
 @click.option("--scenario", "scenario_paths", multiple=True, metavar="SCENARIO",
               help="A scenario every realisation must hold: a shipped name or a TOML file; repeat for more "
-                   f"[default: every shipped one: {', '.join(STANDARD)}].")
+                   f"[default: the bench profile's scenarios, else every shipped one: {', '.join(STANDARD)}].")
 @click.option("--seed", default=None, type=SEED, help="Base seed of every scenario (default: each scenario's own).")
 @click.option("--all-runs", is_flag=True, help="Run every realisation --runs times on every scenario (no early "
               "stop once a realisation clearly holds or fails).")
@@ -67,7 +68,7 @@ def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_nam
     sp, machine, bench = load_inputs(spec, bench_name)
     if bench_name is not None:
         sp = sp.model_copy(update={"bench": bench_name})
-    scenarios = tuple(scenario_for(p, sp, runs) for p in (scenario_paths or STANDARD))
+    scenarios = tuple(scenario_for(p, sp, runs) for p in (scenario_paths or bench_scenarios(bench)))
     console = Console(stderr=as_json)
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   console=Console(stderr=True), transient=True) as bar:

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated, Literal
 
 from pydantic import Field
 
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Real, bounded, zero_or_at_least
+from patchgen.inputs.resources import folder, resolve
+from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.validation import load_profile, validate
 from patchgen.profiles.uncertainty import RANGE_FIELDS, BenchUncertainty, range_problem
 
@@ -70,6 +73,18 @@ class BenchProfile(InputModel):
     uncertainty: BenchUncertainty = BenchUncertainty()
     recordings: list[Annotated[str, Field(min_length=1)]] = Field(
         default_factory=list, description="the recordings an identified profile was fitted to (patchgen identify)")
+    scenarios: list[Annotated[str, Field(min_length=1, max_length=1000)]] = Field(
+        default_factory=list, max_length=50,
+        description="the scenarios this bench is judged in (shipped names, or files, a relative path read "
+                    "beside the profile first); none: every shipped one (STANDARD_SCENARIOS)")
+
+
+STANDARD_SCENARIOS = ("offset-10deg", "finger-push", "step-cart", "hold-120s")  # the shipped set
+
+
+def bench_scenarios(bench: BenchProfile) -> tuple[str, ...]:
+    """The scenarios a patch is judged in on this bench: the profile's own, else the shipped set."""
+    return tuple(bench.scenarios) or STANDARD_SCENARIOS
 
 
 def load_bench(name_or_path: str, source: str = "", field: str = "bench") -> BenchProfile:
@@ -88,7 +103,30 @@ def load_bench(name_or_path: str, source: str = "", field: str = "bench") -> Ben
     BenchProfile
         The checked profile; a bad value raises InputError naming the profile file and field.
     """
-    return load_profile(BenchProfile, name_or_path, "bench", source, field, check=check_bench)
+    bench = load_profile(BenchProfile, name_or_path, "bench", source, field, check=check_bench)
+    return _scenarios_found(bench, resolve("bench", name_or_path, source, field))
+
+
+def _scenarios_found(bench: BenchProfile, where) -> BenchProfile:
+    """The profile with each of its scenarios found (a relative path beside the profile first, as
+    patchgen.inputs.resources.resolve looks) and read: a file is kept by its path, a shipped one by
+    its name; a scenario that cannot be found or read is an InputError naming the profile's
+    ``scenarios[i]`` or the scenario's own field."""
+    if not bench.scenarios:
+        return bench
+    label = str(where) if isinstance(where, Path) else bench.id
+    found = []
+    for i, name in enumerate(bench.scenarios):
+        path = resolve("scenario", name, label, f"scenarios[{i}]")
+        if path == folder("scenario").joinpath(f"{name}.toml"):
+            found.append(name)  # a shipped scenario, by its name
+            continue
+        if not (isinstance(path, Path) and path.is_file()):
+            raise InputError(label, f"scenarios[{i}]", f"{name!r}: no such scenario file (looked for beside the "
+                                                      "profile, then in the working folder)")
+        found.append(str(path))
+        load_scenario(found[-1])
+    return bench.model_copy(update={"scenarios": found})
 
 
 def nominal(bench: BenchProfile, key: str) -> float:

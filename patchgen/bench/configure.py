@@ -74,6 +74,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     stride = max(1, round(scenario.record_dt_s / step))
     imp = machine.imperfections
 
+    scenario = scenario.on_track(plant.d)  # an offset or step given as a fraction of the track, in metres
     levels = noise_and_drift(circuit.sensor_ids, bench, machine, scenario, ideal)
     sensor_rms, amp_rms, drift = levels.sensor_V_rms, levels.amplifier_V_rms, levels.drift_V_per_s
     s_proc = [noise_process(sensor_rms[s], levels.sensor_bandwidth_Hz, step)

@@ -29,7 +29,7 @@ def scenario_for(path: str, spec: DesignSpec, runs: int = 1, ideal: bool = False
     patchgen.bench.simulate, once the circuit's time constants are known)."""
     from patchgen.bench.engine import default_step
 
-    sc = load_scenario(path)
+    sc = load_scenario(path).on_track(spec.plant.d)  # fractions of the track in metres
     check_on_track(sc, spec.plant.d, spec.path)
     step = sc.dt_s or default_step([], ideal)
     budget.check(sc, runs, step=step, stride=max(1, round(sc.record_dt_s / step)), history=True,

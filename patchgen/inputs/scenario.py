@@ -35,10 +35,13 @@ SEED_LIMIT = 2**63  # a seed is a non-negative signed 64-bit integer, as the sim
 
 
 class InitialState(InputModel):
-    """Plant state at t = 0 (SI units; the angle in rad or in degrees, not both): the angle within
-    +/-180 deg, the cart within 100 m (and, against a spec, inside its track)."""
+    """Plant state at t = 0 (SI units; the angle in rad or in degrees, not both; the cart in metres
+    or as a fraction of the track, not both): the angle within +/-180 deg, the cart within 100 m
+    (and, against a spec, inside its track)."""
 
     s: magnitude(MAX_DISTANCE_M) = 0.0
+    s_track: magnitude(0.5) | None = Field(default=None, description="the cart's offset as a fraction of the "
+                                           "track length d between the switches: sized for whatever bench")
     theta: magnitude(math.pi) | None = None
     theta_deg: magnitude(180.0) | None = Field(default=None, validate_default=True)
     s_dot: magnitude(MAX_SPEED_M_S) = 0.0
@@ -51,21 +54,29 @@ class InitialState(InputModel):
             raise ValueError("give theta (rad) or theta_deg, not both")
         return v
 
+    @field_validator("s_track", mode="after")
+    @classmethod
+    def _one_offset(cls, v, info: ValidationInfo):
+        if v is not None and info.data.get("s"):
+            raise ValueError("give s (m) or s_track (a fraction of the track), not both")
+        return v
+
     def vector(self) -> tuple[float, float, float, float]:
         """[s, theta, s_dot, theta_dot] in SI units."""
         th = self.theta if self.theta is not None else math.radians(self.theta_deg or 0.0)
         return (self.s, th, self.s_dot, self.theta_dot)
 
 
-_NEEDS = {"force_impulse": ("at", "duration_s", "force_N"), "step": ("size_m",)}
+_NEEDS = {"force_impulse": ("at", "duration_s", "force_N"), "step": ()}  # a step: size_m or size_track
 
 
 class Disturbance(InputModel):
     """A push or a command during the run.
 
     ``force_impulse``: a horizontal force ``force_N`` on the pendulum tip or on the cart from
-    ``time_s`` for ``duration_s``. ``step``: the cart position command steps by ``size_m`` at
-    ``time_s`` (an offset on the s sensor's reference, so the loop moves the cart there).
+    ``time_s`` for ``duration_s``. ``step``: the cart position command steps by ``size_m`` (or
+    ``size_track``, a fraction of the track length d) at ``time_s`` (an offset on the s sensor's
+    reference, so the loop moves the cart there).
     """
 
     kind: Literal["force_impulse", "step"]
@@ -73,15 +84,29 @@ class Disturbance(InputModel):
     at: Literal["pendulum_tip", "cart"] | None = Field(default=None, validate_default=True)
     duration_s: Real | None = bounded(0, MAX_DURATION_S, open_lo=True, default=None, validate_default=True)
     force_N: magnitude(MAX_FORCE_N) | None = Field(default=None, validate_default=True)
+    size_track: magnitude(1.0) | None = Field(default=None, validate_default=True)
     size_m: magnitude(MAX_DISTANCE_M) | None = Field(default=None, validate_default=True)
 
-    @field_validator("at", "duration_s", "force_N", "size_m", mode="after")
+    @field_validator("size_m", mode="after")
+    @classmethod
+    def _one_size(cls, v, info: ValidationInfo):
+        if info.data.get("kind") != "step":
+            return v
+        if v is None and info.data.get("size_track") is None:
+            raise ValueError("missing field (needed for kind 'step'; or size_track, a fraction of the track)")
+        if v is not None and info.data.get("size_track") is not None:
+            raise ValueError("give size_m (m) or size_track (a fraction of the track), not both")
+        return v
+
+    @field_validator("at", "duration_s", "force_N", "size_m", "size_track", mode="after")
     @classmethod
     def _for_kind(cls, v, info: ValidationInfo):
         kind = info.data.get("kind")
         if kind is None:  # the kind itself is wrong, and reported
             return v
         needed = info.field_name in _NEEDS[kind]
+        if kind == "step" and info.field_name in ("size_m", "size_track"):
+            return v  # one of the two: _one_size
         if needed and v is None:
             raise ValueError(f"missing field (needed for kind {kind!r})")
         if not needed and v is not None:
@@ -127,6 +152,18 @@ class Scenario(InputModel):
     drift: Literal["profile", "off"] | Level = "profile"
 
     _path: str = PrivateAttr(default="<scenario>")
+
+    def on_track(self, track_m: float) -> Scenario:
+        """The scenario in SI for a track of length ``track_m`` (the plant's d): an offset and
+        step sizes given as fractions of the track become metres; one in metres stays."""
+        if self.initial.s_track is None and all(x.size_track is None for x in self.disturbances):
+            return self
+        initial = self.initial
+        if initial.s_track is not None:
+            initial = initial.model_copy(update={"s": initial.s_track * track_m, "s_track": None})
+        steps = [x.model_copy(update={"size_m": x.size_track * track_m, "size_track": None})
+                 if x.size_track is not None else x for x in self.disturbances]
+        return self.model_copy(update={"initial": initial, "disturbances": steps})
 
     @property
     def path(self) -> str:
@@ -207,6 +244,7 @@ def check_on_track(sc: Scenario, track_m: float, spec_path: str) -> None:
     InputError
         Naming the scenario's ``initial.s``.
     """
+    sc = sc.on_track(track_m)
     if abs(sc.initial.s) >= track_m / 2:
         raise InputError(sc.path, "initial.s", f"{sc.initial.s:g} m is outside the track: the limit switches of "
                          f"{spec_path} are at +/-{track_m / 2:g} m (plant.d = {track_m:g} m)")

@@ -81,11 +81,13 @@ class ActuatorSpec(InputModel):
 
 
 class WeightsSpec(InputModel):
-    """LQR weights: Q (diagonal by state name, or a full matrix in state order) and R, or
-    Bryson's maximum excursions (eq. 4.9-4.10)."""
+    """LQR weights: Q (diagonal by state name, or a full matrix in state order) and R (per newton
+    squared) or R_V (per command volt squared, as a lab that drives its cart by voltage states it:
+    R = R_V / K_U^2 with the design's K_U), or Bryson's maximum excursions (eq. 4.9-4.10)."""
 
     Q: dict[str, Real] | list[list[Weight]] | None = None
     R: Real | None = None
+    R_V: Real | None = Field(default=None, description="1/V^2: the control weight per command volt squared")
     bryson: dict[str, Real] | None = None
 
 
@@ -242,6 +244,8 @@ def r_matrix(spec: DesignSpec) -> np.ndarray:
     w = spec.weights
     if w.bryson is not None:
         return np.array([[1.0 / w.bryson["u"] ** 2]])
+    if w.R_V is not None:  # u = K_U u_c: a weight per volt squared is R_V / K_U^2 per newton squared
+        return np.array([[float(w.R_V) / spec.actuator.K_U ** 2]])
     return np.array([[float(w.R)]])
 
 
@@ -294,8 +298,8 @@ def check_spec(spec: DesignSpec) -> None:
     w = spec.weights
     err = spec.error
     if w.bryson is not None:
-        if w.Q is not None or w.R is not None:
-            raise err("weights", "give either Q and R or bryson, not both")
+        if w.Q is not None or w.R is not None or w.R_V is not None:
+            raise err("weights", "give either Q and R (or R_V) or bryson, not both")
         for name, sigma in w.bryson.items():
             if name != "u" and name not in states:
                 raise err(f"weights.bryson.{name}", f"unknown state name (states: {', '.join(states)})")
@@ -305,8 +309,10 @@ def check_spec(spec: DesignSpec) -> None:
     else:
         if w.Q is None:
             raise err("weights.Q", "missing field (or give weights.bryson)")
-        if w.R is None:
-            raise err("weights.R", "missing field")
+        if w.R is None and w.R_V is None:
+            raise err("weights.R", "missing field (or R_V, per command volt squared)")
+        if w.R is not None and w.R_V is not None:
+            raise err("weights.R_V", "give R (per newton squared) or R_V (per command volt squared), not both")
         if isinstance(w.Q, dict):
             for name, q in w.Q.items():
                 if name not in states:
@@ -329,7 +335,12 @@ def check_spec(spec: DesignSpec) -> None:
                 raise err("weights.Q", "must be symmetric")
             if np.linalg.eigvalsh(Q).min() < -PSD_TOL * max(1.0, np.abs(Q).max()):
                 raise err("weights.Q", "must be positive semi-definite")
-        _in_range(w.R, "weights.R", WEIGHT_RANGE, "a control weight", err)
+        if w.R is not None:
+            _in_range(w.R, "weights.R", WEIGHT_RANGE, "a control weight", err)
+        else:
+            _in_range(w.R_V, "weights.R_V", WEIGHT_RANGE, "a control weight", err)
+            _in_range(w.R_V / spec.actuator.K_U ** 2, "weights.R_V", WEIGHT_RANGE,
+                      f"a control weight once divided by K_U^2 = {spec.actuator.K_U ** 2:g}", err)
     a = spec.actuator
     if a.model != "gain" and a.tau <= 0:
         raise err("actuator.tau", f"a {a.model} actuator needs a positive time constant (at least {MIN_LAG_S:g} s)")

@@ -92,6 +92,8 @@ def grid_specs(spec: DesignSpec, bench: BenchProfile) -> list[tuple[dict[str, fl
                                                           for k, v in w.bryson.items()}})
             elif w.R is not None:
                 weights = w.model_copy(update={"R": w.R / factors["u"] ** 2})
+            elif w.R_V is not None:
+                weights = w.model_copy(update={"R_V": w.R_V / factors["u"] ** 2})
             else:
                 weights = w
             integ = spec.integrators.model_copy(update={"int_s": spec.integrators.int_s or integral})

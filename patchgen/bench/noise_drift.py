@@ -35,10 +35,9 @@ class NoiseAndDrift:
         """The drift of one integrating amplifier, V/s: the run's rate, which is at the machine's
         time scale (its slowest integrator mode), times how much faster the amplifier's mode
         integrates (e_os/(R C) + i_b/C grows as 1/C); a lag (``k0_per_s`` None) at the run's rate."""
-        if k0_per_s is None or not self.drift_V_per_s:
+        if k0_per_s is None:
             return self.drift_V_per_s
-        ratio = k0_per_s * machine.time_scale_s
-        return self.drift_V_per_s if ratio == 1.0 else self.drift_V_per_s * ratio
+        return self.drift_V_per_s * (k0_per_s * machine.time_scale_s)
 
     @property
     def noisy(self) -> bool:

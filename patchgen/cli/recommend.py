@@ -68,7 +68,7 @@ def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_nam
     sp, machine, bench = load_inputs(spec, bench_name)
     if bench_name is not None:
         sp = sp.model_copy(update={"bench": bench_name})
-    scenarios = tuple(scenario_for(p, sp, runs) for p in (scenario_paths or bench_scenarios(bench)))
+    scenarios = tuple(scenario_for(p, sp, runs).judged() for p in (scenario_paths or bench_scenarios(bench)))
     console = Console(stderr=as_json)
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   console=Console(stderr=True), transient=True) as bar:

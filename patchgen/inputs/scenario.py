@@ -67,7 +67,9 @@ class InitialState(InputModel):
         return (self.s, th, self.s_dot, self.theta_dot)
 
 
-_NEEDS = {"force_impulse": ("at", "duration_s", "force_N"), "step": ()}  # a step: size_m or size_track
+_NEEDS = {"force_impulse": ("at", "duration_s", "force_N"), "step": ()}  # what a kind must have
+_ALLOWED = {"force_impulse": _NEEDS["force_impulse"], "step": ("size_m", "size_track")}  # what it may have
+# (a step has one of its two sizes: Disturbance._one_size)
 
 
 class Disturbance(InputModel):
@@ -104,12 +106,9 @@ class Disturbance(InputModel):
         kind = info.data.get("kind")
         if kind is None:  # the kind itself is wrong, and reported
             return v
-        needed = info.field_name in _NEEDS[kind]
-        if kind == "step" and info.field_name in ("size_m", "size_track"):
-            return v  # one of the two: _one_size
-        if needed and v is None:
+        if info.field_name in _NEEDS[kind] and v is None:
             raise ValueError(f"missing field (needed for kind {kind!r})")
-        if not needed and v is not None:
+        if info.field_name not in _ALLOWED[kind] and v is not None:
             raise ValueError(f"does not apply to kind {kind!r}")
         return v
 
@@ -152,6 +151,22 @@ class Scenario(InputModel):
     drift: Literal["profile", "off"] | Level = "profile"
 
     _path: str = PrivateAttr(default="<scenario>")
+
+    def excites(self) -> bool:
+        """Whether anything disturbs the balanced pendulum: an initial state off rest, a push or
+        step, or noise and random forces. Holding a scenario with none proves nothing."""
+        levels = (self.noise.level(k) for k in NoiseLevels.model_fields if k != "mode")
+        return (any(self.initial.vector()) or bool(self.initial.s_track) or bool(self.disturbances)
+                or self.noise.mode == "profile" or (self.noise.mode == "explicit" and any(levels)))
+
+    def judged(self) -> Scenario:
+        """The scenario, when a patch may be judged in it; an InputError when nothing disturbs
+        the pendulum (a patch that does nothing at all would hold it)."""
+        if not self.excites():
+            raise InputError(self.path, "initial", "nothing disturbs the pendulum (at rest upright, no push or "
+                             "step, noise off): any patch holds it, so it cannot judge one; start it off rest, "
+                             "push it, or give it noise")
+        return self
 
     def on_track(self, track_m: float) -> Scenario:
         """The scenario in SI for a track of length ``track_m`` (the plant's d): an offset and

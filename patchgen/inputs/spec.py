@@ -17,9 +17,9 @@ from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded, zero_or_at_least
 from patchgen.inputs.resources import resolve
 from patchgen.inputs.validation import read_toml, validate
-from patchgen.plant.cart_pendulum import PARAMETERS, STATE_NAMES
+from patchgen.plant.cart_pendulum import PARAMETERS
+from patchgen.plant.equations import PLANT_STATES
 
-PLANT_STATES = STATE_NAMES  # s, theta, s_dot, theta_dot (patchgen.plant.cart_pendulum)
 MEASURED = ("s", "theta", "s_dot")
 
 # weights: Q entries and R within WEIGHT_RANGE (a weight is relative, and a spread of more than

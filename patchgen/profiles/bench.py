@@ -125,7 +125,7 @@ def _scenarios_found(bench: BenchProfile, where) -> BenchProfile:
             raise InputError(label, f"scenarios[{i}]", f"{name!r}: no such scenario file (looked for beside the "
                                                       "profile, then in the working folder)")
         found.append(str(path))
-        load_scenario(found[-1])
+        load_scenario(found[-1]).judged()
     return bench.model_copy(update={"scenarios": found})
 
 

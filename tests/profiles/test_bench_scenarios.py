@@ -96,3 +96,33 @@ def test_recommend_judges_in_the_bench_s_scenarios(tmp_path):
     assert ran.returncode == 0, ran.stderr
     rec = json.loads((tmp_path / "out" / "recommendation.json").read_text())
     assert [s if isinstance(s, str) else s["name"] for s in rec["scenarios"]] == ["gentle-5deg"]
+
+
+QUIET = {"name": "quiet", "duration_s": 5.0, "noise": "off"}  # upright at rest, nothing pushes it
+
+
+@pytest.mark.parametrize("scenario, judged", [
+    (QUIET, False),
+    ({**QUIET, "initial": {"theta_deg": 1.0}}, True),
+    ({**QUIET, "initial": {"s_track": 0.1}}, True),
+    ({**QUIET, "disturbances": [{"kind": "step", "time_s": 1.0, "size_m": 0.05}]}, True),
+    ({**QUIET, "noise": {"mode": "explicit", "tip_force_N": 0.01}}, True),
+    ({**QUIET, "noise": "profile"}, True),
+    ({**QUIET, "noise": {"mode": "off", "tip_force_N": 0.01}}, False),  # levels count only when explicit
+])
+def test_only_a_scenario_that_disturbs_the_pendulum_can_judge_a_patch(tmp_path, scenario, judged):
+    path = _bench(tmp_path, ["gentle.toml"], scenario)
+    if judged:
+        assert bench_scenarios(load_bench(str(path))) == (str(tmp_path / "benches" / "gentle.toml"),)
+        return
+    with pytest.raises(InputError) as exc:
+        load_bench(str(path))
+    assert exc.value.line().endswith("give it noise") and ": initial: nothing disturbs the pendulum" in exc.value.line()
+
+
+def test_recommend_refuses_a_scenario_that_never_disturbs_the_pendulum(tmp_path):
+    (tmp_path / "quiet.toml").write_text(tomli_w.dumps(QUIET))
+    ran = run_patchgen("recommend", "bench-recommended", "--scenario", tmp_path / "quiet.toml", "-o",
+                       tmp_path / "out", cwd=tmp_path)
+    assert ran.returncode == 2 and "nothing disturbs the pendulum" in ran.stderr
+    assert len(ran.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists()

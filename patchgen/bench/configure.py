@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from patchgen.bench import bench_spread as bs
-from patchgen.bench.circuit import INTEGRATOR, Circuit
+from patchgen.bench.circuit import INTEGRATOR, SUMMER, Circuit
 from patchgen.bench.engine import EngineConfig, default_step, noise_process
 from patchgen.bench.kernel import (
     DIST_CART_FORCE,
@@ -21,16 +21,20 @@ from patchgen.bench.kernel import (
     Settings,
     Wiring,
 )
-from patchgen.bench.lanes import ACT_GAIN, ACT_LAG, ACT_LAG_ZERO
+from patchgen.bench.lanes import A_DEAD_ZONE, A_FORCE_LIMIT, A_K_U, ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, ACT_MOTOR
 from patchgen.bench.noise_drift import NoiseAndDrift, noise_and_drift
 from patchgen.bench.results import SimSettings
+from patchgen.inputs.drive_fields import LAG_MODELS, motor_of
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
+from patchgen.plant.cart_pendulum import RATE_OF
 from patchgen.plant.compiled import VECTOR_PARAMETERS, plant_vector
+from patchgen.plant.drive import with_rotor
 from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
+POSITION_OF = {rate: position for position, rate in RATE_OF.items()}  # the position a rate is the rate of
 SPREAD_ORDER = tuple(k for k in VECTOR_PARAMETERS if k != "J")  # the plant vector's first parameters (d: half track)
 
 
@@ -66,8 +70,12 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     spread = dict(spread or {})
     ranges = bs.active_ranges(bench, ideal, scenario.noise.mode == "profile") if bench_spread else {}
     fastest = [1.0 / v for v in circuit.time_rates() if v > 0]
-    if not ideal and bench.actuator.model != "gain":
+    motor = motor_of(bench.actuator)
+    if not ideal and bench.actuator.model in LAG_MODELS:
         fastest.append(min(bench.actuator.tau, ranges.get("tau", (math.inf,))[0]))
+    if not ideal and motor is not None:
+        fastest.append(motor.electrical_lag())
+    fastest += [1.0 / (f.wn_rad_s * f.zeta) for f in bench.sensors.filters().values()]
     step = scenario.dt_s or default_step(fastest, ideal)
     n_steps = max(1, math.ceil(scenario.duration_s / step - 1e-9))
     step = scenario.duration_s / n_steps
@@ -99,9 +107,17 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         unit_std[key] = (chans, unit[1])
 
     act = bench.actuator
+    emf = 0.0 if motor is None else motor.back_emf_damping()
     if ideal:
-        model, tau, dead, flim = ACT_GAIN, 0.0, 0.0, math.inf
+        model, tau, dead, flim = (ACT_GAIN if motor is None else ACT_MOTOR), 0.0, 0.0, math.inf
         act_text = f"ideal: pure gain K_U = {act.K_U} N/V (no lag, dead zone or force limit)"
+        if motor is not None:
+            act_text += f", with the motor's back-EMF ({emf:.6g} N s/m) and rotor"
+    elif motor is not None:
+        model, tau, dead, flim = ACT_MOTOR, motor.electrical_lag(), act.dead_zone_V, act.force_limit_N
+        act_text = (f"dc_motor: K_U = {act.K_U:.6g} N/V, back-EMF {emf:.6g} N s/m, rotor "
+                    f"{motor.referred_mass():.6g} kg on the cart, electrical lag {tau:g} s, dead zone +/-{dead} V, "
+                    f"amplifier limit +/-{act.V_limit:g} V (force {flim:.6g} N)")
     else:
         model = {"gain": ACT_GAIN, "lag": ACT_LAG, "lag_zero": ACT_LAG_ZERO}[act.model]
         tau, dead, flim = act.tau, act.dead_zone_V, act.force_limit_N
@@ -133,7 +149,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
             fall_angle=math.radians(scenario.fall_angle_deg), output=int(circuit.output_index),
             x0=np.array(scenario.initial.vector(), dtype=np.float64),
             actuator=int(model)),
-        sensors=Sensors(state=_i64(circuit.sensor_state), gain=_f64(circuit.sensor_gain)),
+        sensors=_sensors(circuit, bench),
         noise=Noise(a=_f64([p[0] for p in s_proc] + [a_proc[0]] * circuit.n_amps + [p[0] for p in f_proc]),
                     std=_f64([p[1] for p in s_proc] + [a_proc[1]] * circuit.n_amps + [p[1] for p in f_proc])),
         wiring=Wiring(kind=_i64(circuit.amp_kind), in_ptr=_i64(circuit.in_ptr), in_src=_i64(circuit.in_src),
@@ -141,9 +157,9 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
                       param2=_f64(circuit.param2), ic=_f64(circuit.ic_V),
                       drift=_f64(_drifts(circuit, levels, machine))),
         disturbances=Disturbances(kind=_i64(kinds), t0=_f64(t0s), t1=_f64(t1s), value=_f64(vals)),
-        plant=plant_vector(plant),
+        plant=plant_vector(with_rotor(plant, motor)),
         plant_spread=_f64([spread.get(k, 0.0) for k in SPREAD_ORDER]),
-        actuator=_f64([act.K_U, tau, dead, flim]),
+        actuator=_f64([act.K_U, tau, dead, flim, emf]),
         bench_spread=bs.plan(ranges, bench.uncertainty.distribution,
                              tuple(PLANT_STATES[q] for q in circuit.sensor_state), circuit.sensor_ids, unit_std),
     )
@@ -162,6 +178,40 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         bench_distribution=bench.uncertainty.distribution if ranges else None,
     )
     return cfg, settings
+
+
+def harmless_overloads(circuit: Circuit, cfg: EngineConfig) -> tuple[str, ...]:
+    """The amplifier whose excursion past the rails is the actuator's saturation, not a fault: the
+    command's, when it is a summer (no state to wind up) driving an actuator limited before any
+    dynamics of its own (a gain, a motor's amplifier) whose limit, in command volts (dead zone
+    included, at the lowest K_U a run may draw), lies within the rails. Clipped at the rail, it
+    asks no less than the actuator gives; the run reports its time at the limit instead."""
+    st = cfg.settings
+    j = st.output - circuit.n_sensors
+    if j < 0 or not st.clip or circuit.amp_kind[j] != SUMMER or st.actuator not in (ACT_GAIN, ACT_MOTOR):
+        return ()
+    ranges = cfg.bench_spread.ranges if cfg.bench_spread is not None else {}
+    k_u = ranges.get("K_U", (cfg.actuator[A_K_U],))[0]
+    f_lim = ranges.get("force_limit_N", (0.0, cfg.actuator[A_FORCE_LIMIT]))[1]
+    dead = ranges.get("dead_zone_V", (0.0, cfg.actuator[A_DEAD_ZONE]))[1]
+    within = f_lim / k_u + dead <= st.saturation
+    return (circuit.amp_ids[j],) if within else ()
+
+
+def _sensors(circuit: Circuit, bench: BenchProfile) -> Sensors:
+    """The sensors as the bench has them: each reads its plant state, or a filter's rate of a
+    position; an encoder's count where the profile states one (patchgen.profiles.bench)."""
+    quanta, filters = bench.sensors.quanta(), bench.sensors.filters()
+    order = sorted(filters)  # a filter per filtered quantity, in name order
+    qs = [PLANT_STATES[i] for i in circuit.sensor_state]
+    filt = [order.index(q) if q in filters else -1 for q in qs]
+    source = [PLANT_STATES.index(POSITION_OF[q]) if q in filters else -1 for q in qs]
+    return Sensors(state=_i64(circuit.sensor_state), gain=_f64(circuit.sensor_gain),
+                   quantum=_f64([quanta.get(POSITION_OF.get(q, q), 0.0) if q in filters else quanta.get(q, 0.0)
+                                 for q in qs]),
+                   filt=_i64(filt), source=_i64(source),
+                   wn=_f64([filters[q].wn_rad_s if q in filters else 0.0 for q in qs]),
+                   zeta=_f64([filters[q].zeta if q in filters else 0.0 for q in qs]))
 
 
 def _drifts(circuit: Circuit, levels: NoiseAndDrift, machine: MachineProfile) -> np.ndarray:

@@ -68,7 +68,7 @@ class EngineConfig:
     plant: np.ndarray  # PLANT_VECTOR of patchgen.plant.compiled: M, m, l, g, b_VF, c, half track, J
     plant_spread: np.ndarray  # per plant parameter (the plant vector's first ones, configure.SPREAD_ORDER): each
     # run draws it uniformly within +/- this fraction
-    actuator: np.ndarray  # ACTUATOR_VECTOR of patchgen.bench.lanes: K_U, tau, dead zone, force limit
+    actuator: np.ndarray  # ACTUATOR_VECTOR of patchgen.bench.lanes: K_U, tau, dead zone, force limit, back-EMF
     bench_spread: bench_spread.BenchSpread | None = None  # each run's bench drawn from these ranges
 
     @property
@@ -138,6 +138,7 @@ class BatchOutput:
     rms_theta: np.ndarray
     max_abs_u_c: np.ndarray
     max_abs_force: np.ndarray
+    limit_time: np.ndarray  # s the command sat at the actuator's limit (a motor's: the amplifier's)
     overload_first: np.ndarray  # (runs, amps) s, NaN if never
     overload_time: np.ndarray  # (runs, amps) total time overloaded, s
     final_state: np.ndarray  # (runs, 4)

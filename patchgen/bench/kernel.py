@@ -36,13 +36,13 @@ import numba as nb
 import numpy as np
 
 from patchgen.bench.circuit import DIFFERENTIATOR
-from patchgen.bench.lanes import N_ACTUATOR, N_ACTUATOR_ROWS, actuator_rates, circuit, drive
+from patchgen.bench.lanes import N_ACTUATOR, N_ACTUATOR_ROWS, actuator_rates, circuit, drive, quantised, sensor_filters
 from patchgen.bench.noise import WORDS, fill_normals
 from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "a5b5c6a9fb7ecdba"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_IN = "9661c9b032010832"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 64  # runs per block
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 N_STATES = len(PLANT_STATES)
@@ -50,9 +50,9 @@ S, THETA = PLANT_STATES.index("s"), PLANT_STATES.index("theta")
 
 # per-run results: event times (NaN: never), maxima, RMS theta, then the final plant state
 SUMMARIES = ("trip_time", "fall_time", "max_abs_theta", "max_abs_s", "rms_theta", "max_abs_u_c",
-             "max_abs_force")
+             "max_abs_force", "limit_time")
 RESULTS = SUMMARIES + tuple(f"final_{q}" for q in PLANT_STATES)
-R_TRIP, R_FALL, R_MAX_TH, R_MAX_S, R_RMS_TH, R_MAX_UC, R_MAX_F = (RESULTS.index(c) for c in SUMMARIES)
+R_TRIP, R_FALL, R_MAX_TH, R_MAX_S, R_RMS_TH, R_MAX_UC, R_MAX_F, R_LIMIT = (RESULTS.index(c) for c in SUMMARIES)
 R_FINAL = RESULTS.index(f"final_{PLANT_STATES[0]}")  # the final state, N_STATES columns
 # history channels before the amplifier outputs
 HISTORY_CHANNELS = ("t",) + PLANT_STATES + ("s_ref", "u_c", "force")
@@ -91,11 +91,17 @@ class Settings(NamedTuple):
 
 
 class Sensors(NamedTuple):
-    """Per sensor: the plant state it reads (index) and its nominal gain (V per SI unit; each
-    run's own is in Draws)."""
+    """Per sensor: the plant state it reads (index), its nominal gain (V per SI unit; each run's
+    own is in Draws), its encoder's count (SI units; 0: continuous), and for a velocity from a
+    filter, the filter's index (-1: none), the position it filters, its wn (rad/s) and zeta."""
 
     state: np.ndarray
     gain: np.ndarray
+    quantum: np.ndarray
+    filt: np.ndarray
+    source: np.ndarray
+    wn: np.ndarray
+    zeta: np.ndarray
 
 
 class Noise(NamedTuple):
@@ -167,6 +173,12 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     drift = np.empty((na, nl))  # each integrating amplifier drifts one way, drawn per run
     xp = np.empty((N_STATES, nl))
     za = np.empty((na, nl))
+    nf = 0  # the sensors' filters, two states each
+    for i in range(ns):
+        nf = max(nf, sensors.filt[i] + 1)
+    xf = np.zeros((2 * nf, nl))
+    kf = np.zeros((4, 2 * nf, nl))
+    xft = np.empty((2 * nf, nl))
     over = np.empty((2, na, nl))  # each lane's overloads (first time, time), copied out at its end
     for l in range(nl):
         plant_coefficients(plants[lo + l], pc[:, l])
@@ -184,6 +196,11 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
             over[0, j, l], over[1, j, l] = out.overload_first[lo + l, j], out.overload_time[lo + l, j]
         for i in range(N_STATES):
             xp[i, l] = settings.x0[i]
+        for i in range(ns):  # a filter starts settled: on its position, at the rate the run starts with
+            k = sensors.filt[i]
+            if k >= 0:
+                xf[2 * k, l] = quantised(settings.x0[sensors.source[i]], sensors.quantum[i])
+                xf[2 * k + 1, l] = settings.x0[sensors.state[i]]
     actuator_rates(act)
     nz = np.zeros((nch, nl))
     rows = (nch + WORDS - 1) // WORDS * WORDS
@@ -209,13 +226,15 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     # filter state to its input, in evaluation order (one pass per amplifier reaches every chain)
     quiet = np.zeros((nch, nl))
     for _ in range(na):
-        circuit(xp, za, 0.0, quiet, sensors.state, gain, wiring, drift, sat, np.bool_(False), sig, raw, ka,
+        circuit(xp, za, xf, 0.0, quiet, sensors, gain, wiring, drift, sat, np.bool_(False), sig, raw, ka,
                 np.int64(0), acc)  # typed, not literals: one compilation of the circuit
         for j in range(na):
             if wiring.kind[j] == DIFFERENTIATOR:
                 for l in range(nl):
                     za[j, l] -= raw[j, l] / wiring.param1[j]
     forces = np.zeros((4, nl))
+    at_limit = np.zeros(nl, dtype=np.bool_)  # the command at the actuator's limit, at the step's start
+    lim_t = np.zeros(nl)
     tripped = np.zeros(nl, dtype=np.bool_)
     fallen = np.zeros(nl, dtype=np.bool_)
     alive = np.ones(nl, dtype=np.bool_)
@@ -234,16 +253,19 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
         f_cart, f_tip, s_ref = _disturbances(disturbances, t, h)
         for st in range(4):  # stage 0 reads the step's start itself, the others their own states
             if st > 0:
-                _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat)
-            X, Z, XA = (xp, za, xa) if st == 0 else (xt, zt, xat)
-            circuit(X, Z, s_ref, nz, sensors.state, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
-            drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, forces, st)
+                _stage_state(st, h, xp, za, xa, xf, kp, ka, kx, kf, xt, zt, xat, xft)
+            X, Z, XA, XF = (xp, za, xa, xf) if st == 0 else (xt, zt, xat, xft)
+            sensor_filters(X, XF, sensors, kf, st)
+            circuit(X, Z, XF, s_ref, nz, sensors, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
+            drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, forces,
+                  at_limit, st)
             if st == 0:  # record and summarise time t; a run ends at the scenario's end or at a trip
                 for l in range(n_hist):
                     if alive[l] and (n % stride == 0 or n == n_steps or tripped[l]):
                         _record(out, lo + l, l, t, xp, s_ref, sig, out_index, forces, ns)
                 n_alive -= _summaries(n, t, n == n_steps, lo, alive, tripped, fallen, xp, raw, pinned,
-                                      sig, out_index, forces, settings, sum_th2, mth, ms, muc, mf, over, out)
+                                      sig, out_index, forces, at_limit, settings, sum_th2, mth, ms, muc, mf,
+                                      lim_t, over, out)
         if n_alive == 0:
             break
         for i in range(N_STATES):
@@ -257,6 +279,9 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
                 za[j, l] = (sat if v > sat else (-sat if v < -sat else v)) if rail else v
         for l in range(nl):
             xa[l] += h / 6.0 * (kx[0, l] + 2.0 * kx[1, l] + 2.0 * kx[2, l] + kx[3, l])
+        for i in range(2 * nf):
+            for l in range(nl):
+                xf[i, l] += h / 6.0 * (kf[0, i, l] + 2.0 * kf[1, i, l] + 2.0 * kf[2, i, l] + kf[3, i, l])
         trips = 0
         for l in range(nl):
             trips += alive[l] & (not tripped[l]) & (abs(xp[S, l]) >= half[l])
@@ -288,7 +313,7 @@ def _disturbances(dist, t, h):
 
 
 @nb.njit(**_JIT)
-def _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat):
+def _stage_state(st, h, xp, za, xa, xf, kp, ka, kx, kf, xt, zt, xat, xft):
     """The states at RK4 stage st > 0: the step's start + c * the last stage's slopes."""
     nl = xa.shape[0]
     c = h if st == 3 else 0.5 * h
@@ -300,11 +325,14 @@ def _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat):
             zt[j, l] = za[j, l] + c * ka[st - 1, j, l]
     for l in range(nl):
         xat[l] = xa[l] + c * kx[st - 1, l]
+    for i in range(xf.shape[0]):
+        for l in range(nl):
+            xft[i, l] = xf[i, l] + c * kf[st - 1, i, l]
 
 
 @nb.njit(**_JIT)
-def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_index, forces, settings,
-               sum_th2, mth, ms, muc, mf, over, out):
+def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_index, forces, at_limit,
+               settings, sum_th2, mth, ms, muc, mf, lim_t, over, out):
     """Figures at time t of the lanes still running; the results of those whose run ends here.
     Returns how many ended. The running figures are updated in every lane (an ended lane's are
     no longer read), so that loop vectorises (the tests for an event with & and |, not the
@@ -321,6 +349,7 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
         ms[l] = s if s > ms[l] else ms[l]
         muc[l] = u if u > muc[l] else muc[l]
         mf[l] = f if f > mf[l] else mf[l]
+        lim_t[l] = lim_t[l] + h if at_limit[l] & (not (end | tripped[l])) else lim_t[l]
         events += alive[l] & (tripped[l] | ((th > fall) & (not fallen[l])))
     overloads = 0
     for j in range(raw.shape[0]):
@@ -347,7 +376,7 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
             for j in range(raw.shape[0]):
                 out.overload_first[r, j], out.overload_time[r, j] = over[0, j, l], over[1, j, l]
             res[r, R_MAX_TH], res[r, R_MAX_S], res[r, R_RMS_TH] = mth[l], ms[l], math.sqrt(sum_th2[l] / (n + 1))
-            res[r, R_MAX_UC], res[r, R_MAX_F] = muc[l], mf[l]
+            res[r, R_MAX_UC], res[r, R_MAX_F], res[r, R_LIMIT] = muc[l], mf[l], lim_t[l]
             for i in range(N_STATES):
                 res[r, R_FINAL + i] = xp[i, l]
             alive[l] = False

@@ -8,6 +8,8 @@ sine and cosine by arithmetic included, are patchgen.plant.compiled's.
 
 from __future__ import annotations
 
+import math
+
 import numba as nb
 import numpy as np
 
@@ -15,9 +17,10 @@ from patchgen.bench.circuit import INTEGRATOR, LAG, SUMMER
 from patchgen.plant.compiled import plant_accel, sincos
 from patchgen.plant.equations import PLANT_STATES
 
-ACT_GAIN, ACT_LAG, ACT_LAG_ZERO = 0, 1, 2
-ACTUATOR_VECTOR = ("K_U", "tau", "dead_zone", "force_limit")  # a run's actuator: N/V, s, V, N
-A_K_U, A_TAU, A_DEAD_ZONE, A_FORCE_LIMIT = range(len(ACTUATOR_VECTOR))
+ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, ACT_MOTOR = 0, 1, 2, 3
+# a run's actuator: N/V, s, V, N, N s/m (a motor's back-EMF damping; 0 for the others)
+ACTUATOR_VECTOR = ("K_U", "tau", "dead_zone", "force_limit", "back_emf")
+A_K_U, A_TAU, A_DEAD_ZONE, A_FORCE_LIMIT, A_BACK_EMF = range(len(ACTUATOR_VECTOR))
 N_ACTUATOR = len(ACTUATOR_VECTOR)
 A_INV_TAU, A_KU_TAU = N_ACTUATOR, N_ACTUATOR + 1  # rows actuator_rates adds: 1 / tau, K_U / tau
 N_ACTUATOR_ROWS = N_ACTUATOR + 2
@@ -45,22 +48,49 @@ def _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc):
     return (0 if hi > lo else 1), in_src[hi], in_gain[hi]
 
 
+@nb.njit(inline="always", **_JIT)
+def quantised(x, quantum):
+    """x as an encoder reports it: the nearest whole count of ``quantum`` (0: x itself)."""
+    return x if quantum == 0.0 else quantum * math.floor(x / quantum + 0.5)
+
+
 @nb.njit(**_JIT)
-def circuit(X, Z, s_ref, nz, sensor_state, sensor_gain, wiring, drift, sat, clip, sig, raw, dz, st, acc):
+def sensor_filters(X, XF, sensors, kf, st):
+    """The slopes of the sensors' filter states into kf[st]: filter k holds (y, y') of a
+    quantised position through wn^2 / (s^2 + 2 zeta wn s + wn^2), and y' is the sensor's reading
+    (a velocity from a filter, as a lab without a tachometer has it)."""
+    for i in range(sensors.state.shape[0]):
+        k = sensors.filt[i]
+        if k < 0:
+            continue
+        q, d, wn, ze = sensors.source[i], sensors.quantum[i], sensors.wn[i], sensors.zeta[i]
+        for l in range(X.shape[1]):
+            u = quantised(X[q, l], d)
+            kf[st, 2 * k, l] = XF[2 * k + 1, l]
+            kf[st, 2 * k + 1, l] = wn * wn * (u - XF[2 * k, l]) - 2.0 * ze * wn * XF[2 * k + 1, l]
+
+
+@nb.njit(**_JIT)
+def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip, sig, raw, dz, st, acc):
     """Sensors and amplifiers in evaluation order: sig (clipped if clip; its last row stays 0),
     raw (before clipping), and the amplifier state derivatives into dz[st] (a summer's stay 0).
-    sensor_state: the plant state each sensor reads; wiring: patchgen.bench.kernel's Wiring;
-    X, Z, nz, drift and sensor_gain (sensor, lane) are per lane."""
+    sensors: patchgen.bench.kernel's Sensors (a sensor reads its plant state, quantised, or its
+    filter's output in XF); wiring: patchgen.bench.kernel's Wiring; X, Z, XF, nz, drift and
+    sensor_gain (sensor, lane) are per lane."""
     amp_kind, in_ptr, in_src, in_gain = wiring.kind, wiring.in_ptr, wiring.in_src, wiring.in_gain
     param1, param2 = wiring.param1, wiring.param2
-    ns = sensor_state.shape[0]
+    ns = sensors.state.shape[0]
     nl = acc.shape[1]
     hi = sat if clip else np.inf
     for i in range(ns):
-        q = sensor_state[i]
+        q, k, d = sensors.state[i], sensors.filt[i], sensors.quantum[i]
+        if k >= 0:
+            for l in range(nl):
+                sig[i, l] = sensor_gain[i, l] * XF[2 * k + 1, l] + nz[i, l]
+            continue
         ref = s_ref if q == S_INDEX else 0.0
         for l in range(nl):
-            sig[i, l] = sensor_gain[i, l] * (X[q, l] - ref) + nz[i, l]
+            sig[i, l] = sensor_gain[i, l] * (quantised(X[q, l], d) - ref) + nz[i, l]
     # outputs in evaluation order (integrators and lags, whose outputs are their states, first)
     for j in range(amp_kind.shape[0]):
         kd, a = amp_kind[j], ns + j
@@ -108,10 +138,13 @@ def actuator_rates(ap):
 
 
 @nb.njit(**_JIT)
-def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx, forces, st):
+def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx, forces, at_limit, st):
     """Actuator (dead zone, model, force limit; off once tripped) and plant slopes per lane,
-    into kp[st], kx[st], forces[st]. act: the actuator's model ACT_*; ap (N_ACTUATOR_ROWS, lane):
-    each lane's K_U, tau, dead zone, force limit, then 1 / tau and K_U / tau (actuator_rates);
+    into kp[st], kx[st], forces[st], and at stage 0 whether the command sits at the actuator's
+    limit into at_limit. act: the actuator's model ACT_*; ap (N_ACTUATOR_ROWS, lane): each lane's
+    K_U, tau, dead zone, force limit, back-EMF, then 1 / tau and K_U / tau (actuator_rates); a
+    motor's command K_U v is limited at the amplifier (force limit = a V_limit), then the back-EMF
+    takes b s_dot from it, through the electrical lag tau when it has one;
     X (plant state), XA (actuator state) and pc (plant_coefficients) are per lane. f_cart and
     f_tip are the scenario's pushes (N); the last two rows of nz, the bench's random forces on
     the cart and at the tip (N), per lane."""
@@ -124,13 +157,24 @@ def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx
         u = sig[out_index, l]
         v = u - dz if u > dz else (u + dz if u < -dz else 0.0)
         xa = XA[l]
-        if act == ACT_GAIN:
-            force, dx = K_U * v, 0.0
-        elif act == ACT_LAG:
-            force, dx = xa, (K_U * v - xa) * inv_tau
+        if act == ACT_MOTOR:
+            cmd = K_U * v
+            limited = cmd >= flim or cmd <= -flim
+            cmd = flim if cmd > flim else (-flim if cmd < -flim else cmd)
+            net = cmd - ap[A_BACK_EMF, l] * X[2, l]
+            lagged = ap[A_TAU, l] > 0.0
+            force, dx = (xa, (net - xa) * inv_tau) if lagged else (net, 0.0)
         else:
-            force, dx = ku_tau * (v - xa), (v - xa) * inv_tau
-        force = flim if force > flim else (-flim if force < -flim else force)
+            if act == ACT_GAIN:
+                force, dx = K_U * v, 0.0
+            elif act == ACT_LAG:
+                force, dx = xa, (K_U * v - xa) * inv_tau
+            else:
+                force, dx = ku_tau * (v - xa), (v - xa) * inv_tau
+            limited = force >= flim or force <= -flim
+            force = flim if force > flim else (-flim if force < -flim else force)
+        if st == 0:
+            at_limit[l] = limited
         kx[st, l] = dx
         forces[st, l] = 0.0 if tripped[l] else force
     for l in range(XA.shape[0]):

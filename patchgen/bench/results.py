@@ -48,6 +48,7 @@ class RunSummary:
     max_abs_u_c_V: float
     max_abs_force_N: float
     overloads: tuple[Overload, ...]
+    actuator_limit_time_s: float  # the command sat at the actuator's limit (a motor's: the amplifier's) this long
     final_state: tuple[float, float, float, float]
     drawn: tuple[tuple[str, float], ...] = ()  # the run's plant (--spread) and bench (--bench-spread) draws
 
@@ -62,6 +63,7 @@ class Distribution:
     fraction_tripped: float
     fraction_fallen: float
     fraction_overloaded: float
+    fraction_at_actuator_limit: float  # runs whose command sat at the actuator's limit (a fact, not a fault)
     overload_fraction: dict[str, float]  # per amplifier
     percentiles: dict[str, dict[str, float | None]]
 
@@ -127,7 +129,8 @@ class SimResult:
 
 
 def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run: int = 0,
-                  drawn: list[tuple[tuple[str, float], ...]] | None = None) -> list[RunSummary]:
+                  drawn: list[tuple[tuple[str, float], ...]] | None = None,
+                  harmless: tuple[str, ...] = ()) -> list[RunSummary]:
     """Each run's summary, from the engine's batches in run order.
 
     Parameters
@@ -140,6 +143,10 @@ def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run:
         The first run's number.
     drawn : list, optional
         Each run's drawn parameters (patchgen.bench.engine.drawn), in run order.
+    harmless : tuple of str
+        Amplifiers whose excursion past the rails is not an overload: the command's, when it is a
+        summer feeding an actuator whose own limit is within the rails (clipped there, it asks
+        what the actuator would give anyway); its time at the limit is reported instead.
 
     Returns
     -------
@@ -153,6 +160,7 @@ def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run:
     ovl_first, ovl_time = cat("overload_first"), cat("overload_time")
     max_th, max_s, rms_th = cat("max_abs_theta"), cat("max_abs_s"), cat("rms_theta")
     max_uc, max_f, final = cat("max_abs_u_c"), cat("max_abs_force"), cat("final_state")
+    limit = cat("limit_time")
     return [
         RunSummary(
             run=first_run + i,
@@ -164,7 +172,9 @@ def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run:
             max_abs_force_N=float(max_f[i]),
             overloads=tuple(
                 Overload(amp_ids[j], _opt(ovl_first[i, j]), round(float(ovl_time[i, j]), 9))
-                for j in np.argsort(ovl_first[i], kind="stable") if not np.isnan(ovl_first[i, j])),
+                for j in np.argsort(ovl_first[i], kind="stable") if not np.isnan(ovl_first[i, j])
+                and amp_ids[j] not in harmless),
+            actuator_limit_time_s=round(float(limit[i]), 9),
             final_state=tuple(float(v) for v in final[i]),
             drawn=drawn[i] if drawn else (),
         )
@@ -187,6 +197,7 @@ def distribution(runs: list[RunSummary], amps: tuple[str, ...]) -> Distribution:
         fraction_tripped=sum(r.limit_switch_tripped for r in runs) / n,
         fraction_fallen=sum(r.fallen for r in runs) / n,
         fraction_overloaded=sum(bool(r.overloads) for r in runs) / n,
+        fraction_at_actuator_limit=sum(r.actuator_limit_time_s > 0 for r in runs) / n,
         overload_fraction={a: sum(any(o.amplifier == a for o in r.overloads) for r in runs) / n
                            for a in amps},
         percentiles={

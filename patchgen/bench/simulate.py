@@ -30,7 +30,7 @@ import numpy as np
 
 from patchgen.bench import budget
 from patchgen.bench.circuit import compile_circuit
-from patchgen.bench.configure import engine_config
+from patchgen.bench.configure import engine_config, harmless_overloads
 from patchgen.bench.engine import LANES, default_step, draw_batch, run_batch
 from patchgen.bench.engine import drawn as engine_drawn
 from patchgen.bench.kernel import HISTORY_CHANNELS
@@ -116,7 +116,7 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
         if progress is not None:
             progress(stop)
 
-    summaries = run_summaries(parts, circuit.amp_ids, first_run, drawn)
+    summaries = run_summaries(parts, circuit.amp_ids, first_run, drawn, harmless_overloads(circuit, cfg))
     history = None
     if keep_history:
         h = parts[0].history[0, :parts[0].history_length[0]]

@@ -11,7 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+from patchgen.inputs.drive_fields import LAG_MODELS, motor_of
 from patchgen.inputs.spec import MEASURED, DesignSpec
+from patchgen.plant.drive import driven
 from patchgen.plant.equations import PLANT_STATES, PlantParams, linear_matrices
 
 
@@ -38,14 +40,21 @@ class LinearModel:
 
 
 def plant_params(spec: DesignSpec) -> PlantParams:
-    """The spec's plant figures as the plant equations take them."""
+    """The spec's plant figures as the plant equations take them (the mechanism alone: a motor's
+    rotor and back-EMF are the drive's, patchgen.plant.drive)."""
     return PlantParams(**spec.plant.model_dump())
 
 
+def design_plant(spec: DesignSpec, plant: PlantParams | None = None) -> PlantParams:
+    """The plant the design's force acts on: the mechanism with the spec's drive folded in (a
+    dc_motor's rotor mass and back-EMF damping; no change for a force actuator)."""
+    return driven(plant or plant_params(spec), motor_of(spec.actuator))
+
+
 def build_model(spec: DesignSpec, plant: PlantParams | None = None) -> LinearModel:
-    """Assemble A, B, C for the spec's states (optionally for a perturbed plant)."""
-    plant = plant or plant_params(spec)
-    Ap, Bp = linear_matrices(plant)
+    """Assemble A, B, C for the spec's states (optionally for a perturbed plant: its mechanism,
+    the spec's drive folded in as for the nominal one)."""
+    Ap, Bp = linear_matrices(design_plant(spec, plant))
     states = spec.states()
     n = len(states)
     A = np.zeros((n, n))
@@ -61,7 +70,7 @@ def build_model(spec: DesignSpec, plant: PlantParams | None = None) -> LinearMod
         A[i, 1] = 1.0
         A[i, i] = -integ.int_theta_leak
     act = spec.actuator
-    if act.model == "gain":
+    if act.model not in LAG_MODELS:  # a gain, or a dc_motor: F = K_U u_c on the driven plant
         B[:4] = Bp
     else:
         # x_a' = -x_a/tau + u/(tau*scale); lag: F = scale*x_a;
@@ -89,7 +98,7 @@ def open_loop_poles(model: LinearModel) -> np.ndarray:
 
 def plant_zeros(spec: DesignSpec, output: str) -> np.ndarray:
     """Finite transmission zeros of output/F_U for the 4-state plant (eq. 2.28)."""
-    Ap, Bp = linear_matrices(plant_params(spec))
+    Ap, Bp = linear_matrices(design_plant(spec))
     C = np.zeros((1, 4))
     C[0, PLANT_STATES.index(output)] = 1.0
     return _sorted(transmission_zeros(Ap, Bp, C))

@@ -11,8 +11,9 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, PrivateAttr, create_model
+from pydantic import Field, PrivateAttr, create_model, field_validator
 
+from patchgen.inputs.drive_fields import LAG_MODELS, DriveFields, k_u_field, k_u_of
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded, zero_or_at_least
 from patchgen.inputs.resources import resolve
@@ -67,17 +68,19 @@ class SensorSpec(InputModel):
 MIN_LAG_S = 1e-3  # a lag shorter than 1 ms is a gain to the loop, and would set a needlessly fine step
 
 
-class ActuatorSpec(InputModel):
-    """The actuator model the design assumes: force per command volt, with optional lag."""
+class ActuatorSpec(DriveFields):
+    """The actuator model the design assumes: force per command volt, with optional lag, or a DC
+    motor driven by voltage (its figures in patchgen.inputs.drive_fields; K_U then follows)."""
 
-    model: Literal["gain", "lag", "lag_zero"] = "gain"
-    K_U: Real = bounded(0.01, 1000, description="N/V (N s/V for lag_zero)")
+    K_U: Real | None = k_u_field("N/V (N s/V for lag_zero; a dc_motor's follows from the motor)")
     tau: Annotated[Real, zero_or_at_least(MIN_LAG_S)] = bounded(0, 10, default=0.0,
                                                                description="lag time constant, s")
     state_scale: Real = bounded(1e-3, 1e3, default=1.0, description="actuator state = F_U / state_scale")
     zero: Real = bounded(0, 1e3, default=1e-5, description="lag_zero: F/F_cmd = (s + zero)/(tau s + 1), rad/s; "
                          "a zero exactly at 0 cancels the cart's position pole (not stabilisable)")
     dead_zone_V: Real = bounded(0, 100, default=0.0, description="not seen by a linear design; reported")
+
+    k_u_check = field_validator("K_U", mode="after")(k_u_of)
 
 
 class WeightsSpec(InputModel):
@@ -170,7 +173,7 @@ class DesignSpec(InputModel):
             out.append("int_s")
         if self.integrators.int_theta:
             out.append("int_theta")
-        if self.actuator.model != "gain":
+        if self.actuator.model in LAG_MODELS:
             out.append("actuator")
         return out
 
@@ -342,10 +345,13 @@ def check_spec(spec: DesignSpec) -> None:
             _in_range(w.R_V / spec.actuator.K_U ** 2, "weights.R_V", WEIGHT_RANGE,
                       f"a control weight once divided by K_U^2 = {spec.actuator.K_U ** 2:g}", err)
     a = spec.actuator
-    if a.model != "gain" and a.tau <= 0:
+    if a.model in LAG_MODELS and a.tau <= 0:
         raise err("actuator.tau", f"a {a.model} actuator needs a positive time constant (at least {MIN_LAG_S:g} s)")
+    if a.model == "dc_motor" and a.tau > 0:
+        raise err("actuator.tau", "a dc_motor's design model has no lag: its current follows the voltage (state "
+                                  "the armature's inductance L_m in the bench profile, whose simulation has it)")
     if spec.estimator.kind == "kalman":
-        _check_kalman(spec, len(PLANT_STATES) + (1 if a.model != "gain" else 0))
+        _check_kalman(spec, len(PLANT_STATES) + (1 if a.model in LAG_MODELS else 0))
 
 
 def _check_kalman(spec: DesignSpec, n_est: int) -> None:

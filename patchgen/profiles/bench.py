@@ -2,31 +2,84 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
+from patchgen.inputs.drive_fields import DriveFields, derived, k_u_field, k_u_of, motor_of
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Real, bounded, zero_or_at_least
 from patchgen.inputs.resources import folder, resolve
 from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.validation import load_profile, validate
+from patchgen.plant.drive import INDUCTANCE
 from patchgen.profiles.uncertainty import RANGE_FIELDS, BenchUncertainty, range_problem
 
 
-class BenchActuator(InputModel):
-    """Command voltage to force: K_U, lag (optional zero at the origin), dead zone, force limit."""
+def _motor_only(value, info):
+    if value is not None and info.data.get("model") != "dc_motor":
+        raise ValueError(f'is a motor figure: only for model = "dc_motor" (this actuator is {info.data.get("model")})')
+    return value
 
-    model: Literal["gain", "lag", "lag_zero"]
-    K_U: Real = bounded(0.01, 1000, description="N/V")
+
+def _amplifier_limit(value, info):
+    if info.data.get("model") == "dc_motor":
+        if value is None:
+            raise ValueError("missing field: a dc_motor's amplifier limit (motor volts)")
+    return _motor_only(value, info)
+
+
+def _force_limit(value, info):
+    if info.data.get("model") != "dc_motor":
+        if value is None:
+            raise ValueError("missing field (N)")
+        return value
+    v_lim = info.data.get("V_limit")
+    if v_lim is None:
+        return value
+    return derived(value, info, "force_limit_N", "a x V_limit", lambda m, d: m.force_per_volt() * v_lim)
+
+
+class BenchActuator(DriveFields):
+    """Command voltage to force: K_U, lag (optional zero at the origin), dead zone, force limit;
+    or a DC motor driven by voltage through an amplifier (patchgen.plant.drive): its figures,
+    its inductance, and the amplifier's voltage limit, at which the command saturates."""
+
+    K_U: Real | None = k_u_field("N/V (a dc_motor's follows from the motor: amp_gain x a)")
     tau: Annotated[Real, zero_or_at_least(1e-3)] = bounded(0, 10, default=0.0, description="s")
+    L_m: Real | None = bounded(INDUCTANCE.lo, INDUCTANCE.hi, default=None, validate_default=True,
+                               description="dc_motor: " + INDUCTANCE.what)
+    V_limit: Real | None = bounded(1e-3, 1e4, default=None, validate_default=True,
+                                   description="dc_motor: the amplifier's output limit, motor volts")
     dead_zone_V: Real = bounded(0, 100, default=0.0)
-    force_limit_N: Real = bounded(0, 1e4, open_lo=True)
+    force_limit_N: Real | None = Field(None, gt=0, le=1e4, validate_default=True,
+                                       description="N (a dc_motor's follows: a x V_limit)")
+
+    k_u_check = field_validator("K_U", mode="after")(k_u_of)
+    motor_only = field_validator("L_m", mode="after")(_motor_only)
+    limit_check = field_validator("V_limit", mode="after")(_amplifier_limit)
+    force_check = field_validator("force_limit_N", mode="after")(_force_limit)
+
+    def motor_lag(self) -> float:
+        """A dc_motor's electrical lag L_m / R_m (s); 0 for other models."""
+        m = motor_of(self)
+        return 0.0 if m is None else m.electrical_lag()
+
+
+class VelocityFilter(InputModel):
+    """A velocity as a lab without a tachometer has it: the rate of its position's (encoder)
+    reading through wn^2 / (s^2 + 2 zeta wn s + wn^2) (Quanser's IP02: 2 pi 10 rad/s, 0.9)."""
+
+    wn_rad_s: Real = bounded(1.0, 1e5, description="rad/s")
+    zeta: Real = bounded(0.05, 10)
 
 
 class BenchSensors(InputModel):
-    """Sensor constants (V per SI unit) and their noise."""
+    """Sensor constants (V per SI unit), their noise, and how each is measured: an encoder's
+    counts (per metre for a distance, per revolution for an angle), a velocity through a filter
+    of its position's reading (none stated: a tachometer, read directly)."""
 
     s: Real = bounded(1e-3, 1e3)
     theta: Real = bounded(1e-3, 1e3)
@@ -34,6 +87,23 @@ class BenchSensors(InputModel):
     noise_V_rms: dict[Literal["s", "theta", "s_dot"], Annotated[Real, Field(ge=0, le=100)]] = Field(
         default_factory=dict)
     noise_bandwidth_Hz: Real = bounded(1e-3, 1e9, default=200.0)
+    counts_per_m: dict[Literal["s"], Annotated[Real, Field(ge=1, le=1e9)]] = Field(
+        default_factory=dict, description="an encoder's counts per metre of a distance it reads")
+    counts_per_rev: dict[Literal["theta"], Annotated[Real, Field(ge=4, le=1e9)]] = Field(
+        default_factory=dict, description="an encoder's counts per revolution of an angle it reads (quadrature "
+                                          "counts: 4 x the lines)")
+    velocity_filter: dict[Literal["s_dot"], VelocityFilter] = Field(
+        default_factory=dict, description="a velocity from a filter of its position's reading, not a tachometer")
+
+    def quanta(self) -> dict[str, float]:
+        """Each encoder-read quantity's count in SI units (m, rad)."""
+        out = {q: 1.0 / n for q, n in self.counts_per_m.items()}
+        out.update({q: 2.0 * math.pi / n for q, n in self.counts_per_rev.items()})
+        return out
+
+    def filters(self) -> dict[str, VelocityFilter]:
+        """The velocities read through a filter, by quantity."""
+        return dict(self.velocity_filter)
 
 
 # Random forces on the plant while it balances, when a bench profile does not state its own. No

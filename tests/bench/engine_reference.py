@@ -11,7 +11,7 @@ import numpy as np
 from patchgen.bench.circuit import DIFFERENTIATOR, INTEGRATOR, LAG, SUMMER
 from patchgen.bench.engine import EngineConfig
 from patchgen.bench.kernel import DIST_CART_FORCE, DIST_TIP_FORCE, H_AMPS, Draws
-from patchgen.bench.lanes import ACT_GAIN, ACT_LAG, S_INDEX
+from patchgen.bench.lanes import ACT_GAIN, ACT_LAG, ACT_MOTOR, S_INDEX
 from patchgen.bench.noise import run_normals
 
 _FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
@@ -29,7 +29,7 @@ def reference_runs(cfg: EngineConfig, draws: Draws, n_history: int = 1):
     n_samples = st.steps // st.stride + 2
     out = {"trip_time": np.full(runs, np.nan), "fall_time": np.full(runs, np.nan),
            "max_abs_theta": np.zeros(runs), "max_abs_s": np.zeros(runs), "rms_theta": np.zeros(runs),
-           "max_abs_u_c": np.zeros(runs), "max_abs_force": np.zeros(runs),
+           "max_abs_u_c": np.zeros(runs), "max_abs_force": np.zeros(runs), "limit_time": np.zeros(runs),
            "overload_first": np.full((runs, n_amp), np.nan), "overload_time": np.zeros((runs, n_amp)),
            "final_state": np.zeros((runs, 4)),
            "history": np.zeros((n_history, n_samples, H_AMPS + n_amp)),
@@ -45,7 +45,7 @@ def reference_runs(cfg: EngineConfig, draws: Draws, n_history: int = 1):
                  std[r, ns + n_amp:], st.saturation, st.clip, st.output, st.actuator,
                  *draws.actuators[r], dist.kind, dist.t0, dist.t1,
                  dist.value, st.fall_angle, out["trip_time"], out["fall_time"], out["max_abs_theta"],
-                 out["max_abs_s"], out["rms_theta"], out["max_abs_u_c"], out["max_abs_force"],
+                 out["max_abs_s"], out["rms_theta"], out["max_abs_u_c"], out["max_abs_force"], out["limit_time"],
                  out["overload_first"], out["overload_time"], out["final_state"], out["history"],
                  out["history_length"])
     return out
@@ -125,9 +125,9 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
 def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
              sensor_state, sensor_gain, sna, sns,
              amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, fna, fns, sat, clip,
-             out_index, act, K_U, tau, dz, flim,
+             out_index, act, K_U, tau, dz, flim, emf,
              dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
-             trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, ovl_first, ovl_time, final,
+             trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, lim_t, ovl_first, ovl_time, final,
              hist, hist_len):
     ns = sensor_state.shape[0]
     na = amp_kind.shape[0]
@@ -221,19 +221,30 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
                 v = uc - dz
             elif uc < -dz:
                 v = uc + dz
-            if act == ACT_GAIN:
-                force = K_U * v
-                kx[st] = 0.0
-            elif act == ACT_LAG:
-                force = xat
-                kx[st] = (K_U * v - xat) / tau
+            if act == ACT_MOTOR:  # the amplifier limits the voltage; the back-EMF acts after it
+                cmd = min(max(K_U * v, -flim), flim)
+                limited = abs(K_U * v) >= flim
+                if tau > 0.0:
+                    force = xat
+                    kx[st] = (cmd - emf * xt[2] - xat) / tau
+                else:
+                    force = cmd - emf * xt[2]
+                    kx[st] = 0.0
             else:
-                force = K_U / tau * (v - xat)
-                kx[st] = (v - xat) / tau
-            if force > flim:
-                force = flim
-            elif force < -flim:
-                force = -flim
+                if act == ACT_GAIN:
+                    force = K_U * v
+                    kx[st] = 0.0
+                elif act == ACT_LAG:
+                    force = xat
+                    kx[st] = (K_U * v - xat) / tau
+                else:
+                    force = K_U / tau * (v - xat)
+                    kx[st] = (v - xat) / tau
+                limited = abs(force) >= flim
+                if force > flim:
+                    force = flim
+                elif force < -flim:
+                    force = -flim
             if tripped:
                 force = 0.0
             d0, d1, d2, d3 = plant_rhs(p, xt[1], xt[2], xt[3], force + (f_cart + nz_f[0]),
@@ -254,6 +265,8 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
             ms = max(ms, abs(xp[0]))
             muc = max(muc, abs(uc))
             mf = max(mf, abs(force))
+            if limited and not last:
+                lim_t[r] += h
             if not fallen and abs(th) > fall_angle:
                 fallen = True
                 fall_t[r] = t

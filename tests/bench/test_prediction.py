@@ -30,7 +30,7 @@ def _run(i: int, held: bool = True, theta: float = 1.0, s: float = 0.1, trip: fl
          fall: float | None = None, overloads: tuple[str, ...] = ()) -> RunSummary:
     return RunSummary(run=i, held=held, limit_switch_tripped=trip is not None, trip_time_s=trip,
                       fallen=fall is not None, fall_time_s=fall, max_abs_theta_deg=theta, max_abs_s_m=s,
-                      rms_theta_deg=0.1, max_abs_u_c_V=1.0, max_abs_force_N=5.0,
+                      rms_theta_deg=0.1, max_abs_u_c_V=1.0, max_abs_force_N=5.0, actuator_limit_time_s=0.0,
                       overloads=tuple(Overload(a, 1.0, 0.01) for a in overloads), final_state=(0.0, 0.0, 0.0, 0.0))
 
 

@@ -27,14 +27,14 @@ from patchgen.bench.results import SimSettings
 from patchgen.inputs.drive_fields import LAG_MODELS, motor_of
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
-from patchgen.plant.cart_pendulum import RATE_OF
+from patchgen.plant.cart_pendulum import POSITION_OF
 from patchgen.plant.compiled import VECTOR_PARAMETERS, plant_vector
 from patchgen.plant.drive import with_rotor
 from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
-POSITION_OF = {rate: position for position, rate in RATE_OF.items()}  # the position a rate is the rate of
+LIMIT_TOL = 1e-9  # relative: an actuator limit at the rails, as a motor's a V_limit / (a amp_gain) computes it
 SPREAD_ORDER = tuple(k for k in VECTOR_PARAMETERS if k != "J")  # the plant vector's first parameters (d: half track)
 
 
@@ -149,7 +149,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
             fall_angle=math.radians(scenario.fall_angle_deg), output=int(circuit.output_index),
             x0=np.array(scenario.initial.vector(), dtype=np.float64),
             actuator=int(model)),
-        sensors=_sensors(circuit, bench),
+        sensors=_sensors(circuit, bench, ideal),
         noise=Noise(a=_f64([p[0] for p in s_proc] + [a_proc[0]] * circuit.n_amps + [p[0] for p in f_proc]),
                     std=_f64([p[1] for p in s_proc] + [a_proc[1]] * circuit.n_amps + [p[1] for p in f_proc])),
         wiring=Wiring(kind=_i64(circuit.amp_kind), in_ptr=_i64(circuit.in_ptr), in_src=_i64(circuit.in_src),
@@ -194,14 +194,15 @@ def harmless_overloads(circuit: Circuit, cfg: EngineConfig) -> tuple[str, ...]:
     k_u = ranges.get("K_U", (cfg.actuator[A_K_U],))[0]
     f_lim = ranges.get("force_limit_N", (0.0, cfg.actuator[A_FORCE_LIMIT]))[1]
     dead = ranges.get("dead_zone_V", (0.0, cfg.actuator[A_DEAD_ZONE]))[1]
-    within = f_lim / k_u + dead <= st.saturation
+    within = f_lim / k_u + dead <= st.saturation * (1.0 + LIMIT_TOL)
     return (circuit.amp_ids[j],) if within else ()
 
 
-def _sensors(circuit: Circuit, bench: BenchProfile) -> Sensors:
+def _sensors(circuit: Circuit, bench: BenchProfile, ideal: bool) -> Sensors:
     """The sensors as the bench has them: each reads its plant state, or a filter's rate of a
-    position; an encoder's count where the profile states one (patchgen.profiles.bench)."""
-    quanta, filters = bench.sensors.quanta(), bench.sensors.filters()
+    position; an encoder's count where the profile states one (patchgen.profiles.bench), unless
+    ideal (a count is a measurement's imperfection, as noise is; a filter is the sensor itself)."""
+    quanta, filters = ({} if ideal else bench.sensors.quanta()), bench.sensors.filters()
     order = sorted(filters)  # a filter per filtered quantity, in name order
     qs = [PLANT_STATES[i] for i in circuit.sensor_state]
     filt = [order.index(q) if q in filters else -1 for q in qs]

@@ -15,14 +15,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from patchgen.bench.circuit import sensor_constants
+from patchgen.bench.bench_linear import actuator_lag, bench_plant
 from patchgen.design.lqg import Design
 from patchgen.design.margins import Margins, loop_margins
 from patchgen.design.model import plant_params
 from patchgen.patch.as_patched import AsPatched, as_patched, figures
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import wired_law
-from patchgen.plant.equations import PLANT_STATES, PlantParams, linear_matrices
+from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
@@ -76,48 +76,37 @@ class LoopPoles:
         return f"wired loop with the {self.actuator}: {verdict} (rightmost pole {pole} 1/s{why})"
 
 
-def linear_loop(net: Netlist, plant: PlantParams, bench: BenchProfile, tau: float | None
+def linear_loop(net: Netlist, plant: PlantParams, bench: BenchProfile, lagged: bool
                 ) -> tuple[np.ndarray, list[str]]:
-    """The closed loop of plant + wired controller + actuator, linearised about upright.
+    """The closed loop of the bench (patchgen.bench.bench_linear) and the wired controller,
+    linearised about upright.
 
     Parameters
     ----------
     net : Netlist
         The patch; its controller is read back as wired (patchgen.patch.readback).
     plant : PlantParams
-        The plant (eq. 2.28).
+        The plant's mechanism (eq. 2.28).
     bench : BenchProfile
-        The bench: its actuator gain K_U and its sensors' constants.
-    tau : float or None
-        The actuator's lag (s); None for a pure gain.
+        The bench: its actuator, its sensors' constants and filters.
+    lagged : bool
+        With the actuator's lag (False: the ideal actuator, the force following the command).
 
     Returns
     -------
     (numpy.ndarray, list of str)
-        The closed loop's A and its states' names (plant, actuator if any, then the wired states).
+        The closed loop's A and its states' names (the bench's, then the wired states).
     """
-    law, ks = _wired(net, bench)
-    Ap, Bp = linear_matrices(plant)
-    K_U = bench.actuator.K_U
-    names = list(PLANT_STATES)
-    nc = law.Ac.shape[0]
-    # u_c = Cc xc + Dc ks x
-    if tau is None:
-        A = np.zeros((4 + nc, 4 + nc))
-        A[:4, :4] = Ap + Bp @ (K_U * law.Dc @ ks)
-        A[:4, 4:] = Bp @ (K_U * law.Cc)
-        A[4:, :4] = law.Bc @ ks
-        A[4:, 4:] = law.Ac
-    else:
-        A = np.zeros((5 + nc, 5 + nc))
-        A[:4, :4] = Ap
-        A[:4, 4:5] = Bp
-        A[4, :4] = (K_U * law.Dc @ ks)[0] / tau
-        A[4, 4] = -1.0 / tau
-        A[4, 5:] = (K_U * law.Cc)[0] / tau
-        A[5:, :4] = law.Bc @ ks
-        A[5:, 5:] = law.Ac
-    return A, names + ([] if tau is None else ["actuator"]) + list(law.states)
+    law = wired_law(net)
+    bp = bench_plant(net, plant, bench, lagged)
+    Cy = bp.rows(law.inputs)
+    nb, nc = bp.A.shape[0], law.Ac.shape[0]
+    A = np.zeros((nb + nc, nb + nc))  # u_c = Cc xc + Dc y
+    A[:nb, :nb] = bp.A + bp.B @ (law.Dc @ Cy)
+    A[:nb, nb:] = bp.B @ law.Cc
+    A[nb:, :nb] = law.Bc @ Cy
+    A[nb:, nb:] = law.Ac
+    return A, list(bp.states) + list(law.states)
 
 
 def bench_margins(net: Netlist, plant: PlantParams, bench: BenchProfile) -> Margins:
@@ -144,8 +133,8 @@ def as_patched_on_bench(design: Design, net: Netlist, machine: MachineProfile, b
     AsPatched
         With its ``bench`` loop.
     """
-    act = bench.actuator
-    tag = f"actuator lag {act.tau:g} s" if act.model != "gain" and act.tau > 0 else "actuator a pure gain"
+    lag = actuator_lag(bench)
+    tag = f"actuator lag {lag:g} s" if lag else "actuator without lag"
     loop = figures(f"{bench.id} bench, linearised ({tag})", "as patched",
                    *bench_open_loop(net, plant_params(design.spec), bench))
     return as_patched(design, net, machine).with_bench(loop)
@@ -154,54 +143,35 @@ def as_patched_on_bench(design: Design, net: Netlist, machine: MachineProfile, b
 def bench_open_loop(net: Netlist, plant: PlantParams, bench: BenchProfile) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The wired loop on the bench, broken at the command voltage u_c.
 
-    The loop as the bench closes it, linearised about upright: plant, the bench's actuator (its
-    lag when it has one; the dead zone and limits are not linear), the controller read back from
-    the netlist with its pots as dialled. Broken where the patch's output drives the actuator, it
-    is L(s) = -u_c(s)/w(s) for a command w into the actuator, closed as w = -k L w
-    (patchgen.design.margins.loop_margins), so k = 1 is the loop as wired.
+    The loop as the bench closes it, linearised about upright (patchgen.bench.bench_linear: the
+    plant with its drive, the actuator's lag, the sensors' filters; the dead zone, limits and
+    encoder counts are not linear), the controller read back from the netlist with its pots as
+    dialled. Broken where the patch's output drives the actuator, it is L(s) = -u_c(s)/w(s) for a
+    command w into the actuator, closed as w = -k L w (patchgen.design.margins.loop_margins), so
+    k = 1 is the loop as wired.
 
     Parameters
     ----------
     net, plant, bench : Netlist, PlantParams, BenchProfile
-        The patch, the plant and the bench (K_U, tau, sensor constants).
+        The patch, the plant's mechanism and the bench.
 
     Returns
     -------
     (numpy.ndarray, numpy.ndarray, numpy.ndarray)
         A, B, C of L(s) for patchgen.design.margins.loop_margins.
     """
-    act = bench.actuator
-    tau = act.tau if act.model != "gain" and act.tau > 0 else None
-    law, ks = _wired(net, bench)
-    Ap, Bp = linear_matrices(plant)
-    nc, na = law.Ac.shape[0], 0 if tau is None else 1
-    n = 4 + na + nc
-    A, B, C = np.zeros((n, n)), np.zeros((n, 1)), np.zeros((1, n))
-    A[:4, :4] = Ap
-    A[4 + na:, :4] = law.Bc @ ks
-    A[4 + na:, 4 + na:] = law.Ac
-    if tau is None:
-        B[:4] = Bp * act.K_U
-    else:
-        A[:4, 4:5] = Bp
-        A[4, 4] = -1.0 / tau
-        B[4, 0] = act.K_U / tau
-    C[0, :4] = (law.Dc @ ks)[0]
-    C[0, 4 + na:] = law.Cc[0]
-    return A, B, -C
-
-
-def _wired(net: Netlist, bench: BenchProfile):
-    """The controller as wired (patchgen.patch.readback.wired_law) and the map ks from the plant
-    state to its inputs' volts (the bench's sensor constants): u_c = Cc xc + Dc ks x."""
     law = wired_law(net)
-    names = list(PLANT_STATES)
-    gains = dict(zip((s.id for s in net.sensors), sensor_constants(net, bench)))
-    ks = np.zeros((len(law.inputs), 4))
-    for r, sid in enumerate(law.inputs):
-        sensor = next(s for s in net.sensors if s.id == sid)
-        ks[r, names.index(sensor.quantity)] = gains[sid]
-    return law, ks
+    bp = bench_plant(net, plant, bench)
+    Cy = bp.rows(law.inputs)
+    nb, nc = bp.A.shape[0], law.Ac.shape[0]
+    A, B, C = np.zeros((nb + nc, nb + nc)), np.zeros((nb + nc, 1)), np.zeros((1, nb + nc))
+    A[:nb, :nb] = bp.A
+    A[nb:, :nb] = law.Bc @ Cy
+    A[nb:, nb:] = law.Ac
+    B[:nb] = bp.B
+    C[0, :nb] = (law.Dc @ Cy)[0]
+    C[0, nb:] = law.Cc[0]
+    return A, B, -C
 
 
 def loop_poles(A: np.ndarray, names: list[str], actuator: str) -> LoopPoles:
@@ -224,8 +194,8 @@ def diagnose(net: Netlist, plant: PlantParams, bench: BenchProfile) -> list[Loop
     list of LoopPoles
         The ideal actuator first, then the bench's (a lag model with tau > 0).
     """
-    act = bench.actuator
-    out = [loop_poles(*linear_loop(net, plant, bench, None), "ideal actuator (pure gain K_U)")]
-    if act.model != "gain" and act.tau > 0:
-        out.append(loop_poles(*linear_loop(net, plant, bench, act.tau), f"bench actuator (lag {act.tau:g} s)"))
+    lag = actuator_lag(bench)
+    out = [loop_poles(*linear_loop(net, plant, bench, False), "ideal actuator (pure gain K_U)")]
+    if lag:
+        out.append(loop_poles(*linear_loop(net, plant, bench, True), f"bench actuator (lag {lag:g} s)"))
     return out

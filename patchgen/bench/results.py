@@ -14,10 +14,11 @@ from patchgen.inputs.scenario import Scenario
 PERCENTILES = (5, 50, 95)
 
 IDEAL_MEANING = (
-    "no sensor or amplifier noise, no random force on the plant, no integrator drift, no saturation "
-    "(overloads still recorded), "
-    "actuator a pure gain K_U; kept: nonlinear plant, pot settings as dialled, weights and "
-    "inversions, differentiator roll-off as wired, limit switches, disturbances")
+    "no sensor or amplifier noise, no encoder counts, no random force on the plant, no integrator drift, "
+    "no saturation (overloads still recorded), "
+    "actuator a pure gain K_U (a motor's back-EMF and rotor kept: they are the plant's); kept: nonlinear plant, "
+    "pot settings as dialled, weights and inversions, differentiator roll-off as wired, sensors' velocity "
+    "filters, limit switches, disturbances")
 
 
 @dataclass(frozen=True)

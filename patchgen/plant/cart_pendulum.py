@@ -49,6 +49,7 @@ STATE_UNITS = {s.name: s.unit for s in STATES}
 POSITION = "s"  # the state the limit switches and a step command act on
 ANGLE = "theta"  # the state whose excursion past the fall angle ends a run
 RATE_OF = {"s": "s_dot", "theta": "theta_dot"}  # each position-like state's rate
+POSITION_OF = {rate: position for position, rate in RATE_OF.items()}  # the position a rate is the rate of
 
 # Table B.1's parameters, within the bounds of a bench-sized cart and pendulum (docs/spec.md)
 PARAMETERS = (

@@ -26,14 +26,17 @@ import numpy as np
 
 from patchgen.bench.circuit import sensor_constants
 from patchgen.bench.noise_drift import NoiseAndDrift
+from patchgen.inputs.drive_fields import motor_of
 from patchgen.inputs.scenario import Disturbance
 from patchgen.patch.netlist import Amplifier, Netlist, Pot
 from patchgen.patch.parts import parts_for
 from patchgen.patch.reading import Reading, Stage, read
+from patchgen.plant.cart_pendulum import POSITION, POSITION_OF
+from patchgen.plant.drive import with_rotor
 from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
-from patchgen.spice.elements import DeckLines, bound, clamp, num, pot_wiper_position, spice_name
+from patchgen.spice.elements import DeckLines, bound, clamp, num, pot_wiper_position, spice_name, state_integrator
 from patchgen.spice.plant import (
     CONTROL_NODE,
     FORCE_NODE,
@@ -134,6 +137,9 @@ def _sensors(d: DeckLines, net: Netlist, bench: BenchProfile, machine: MachinePr
     Inside the reference the limit changes nothing (its rounding is below 1e-9 V up to 80 % of it)."""
     d.comment(f"Sensors: volts = bench sensor constant x state, limited at +/-{machine.reference_V} V")
     levels = settings.noise_and_drift
+    filters = bench.sensors.filters()
+    if bench.sensors.quanta():  # a staircase stalls ngspice's time step at every count
+        d.comment("Encoder counts left out: the deck reads the states continuously (the simulator has the counts)")
     for s, k in zip(net.sensors, sensor_constants(net, bench)):
         if s.id not in STATE_NODES:
             raise ValueError(f"sensor {s.id!r} is not a plant state")
@@ -141,13 +147,30 @@ def _sensors(d: DeckLines, net: Netlist, bench: BenchProfile, machine: MachinePr
         rms = levels.sensor_V_rms.get(s.id, 0.0)
         clean = f"{node}_clean" if rms > 0 else node
         state = f"v({STATE_NODES[s.id]})"
-        if s.id == "s" and any(x.kind == "step" for x in settings.disturbances):
+        if s.id in filters:
+            state = _velocity_filter(d, s.id, filters[s.id], settings.x0)
+        if s.id == POSITION and any(x.kind == "step" for x in settings.disturbances):
             state = f"({state}-v({S_REF_NODE}))"  # a step moves the reference the s sensor is read against
         volts = clamp(f"{num(k)}*{state}", machine.reference_V)
         d.add(f"B_sens_{spice_name(s.id)} {clean} 0 V = {volts}")
         if rms > 0:
             _noise_source(d, f"E_sens_{spice_name(s.id)}_noise", node, clean, rms,
                           levels.sensor_bandwidth_Hz, settings.duration_s)
+
+
+def _velocity_filter(d: DeckLines, rate: str, f, x0) -> str:
+    """A velocity as the bench reads it: the rate of its position's reading through
+    wn^2 / (s^2 + 2 zeta wn s + wn^2), two states settled on the run's start. Returns the
+    expression of the filtered rate."""
+    position = POSITION_OF[rate]
+    x = f"v({STATE_NODES[position]})"
+    start = dict(zip(PLANT_STATES, x0))
+    y, yd = f"vf_{spice_name(rate)}", f"vfd_{spice_name(rate)}"
+    d.comment(f"{rate} from a filter of {position}'s reading: wn {f.wn_rad_s:g} rad/s, zeta {f.zeta:g}")
+    state_integrator(d, y, f"v({yd})", start[position])
+    state_integrator(d, yd, f"{num(f.wn_rad_s ** 2)}*({x}-v({y}))-{num(2 * f.zeta * f.wn_rad_s)}*v({yd})",
+                     start[rate])
+    return f"v({yd})"
 
 
 def _pot(d: DeckLines, reading: Reading, machine: MachineProfile, pot: Pot, load_ohm: float | None) -> str:
@@ -312,7 +335,8 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     d.comment(f"Control voltage u_c = output of {reading.output}")
     d.add(f"V_uc {CONTROL_NODE} {_source_node(reading, reading.output)} DC 0")
     actuator(d, plant, bench, settings.actuator == "ideal")
-    cart_pendulum(d, plant, settings.x0, _random_forces(d, disturbances(d, settings.disturbances), settings))
+    pushes = _random_forces(d, disturbances(d, settings.disturbances), settings)
+    cart_pendulum(d, with_rotor(plant, motor_of(bench.actuator)), settings.x0, pushes)
 
     max_step = settings.max_step_s or settings.step_s
     files: dict[str, str] = {}

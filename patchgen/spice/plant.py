@@ -6,8 +6,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from patchgen.inputs.drive_fields import motor_of
 from patchgen.inputs.scenario import Disturbance
 from patchgen.plant.behavioural import accelerations
+from patchgen.plant.drive import DCMotor
 from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.spice.elements import SMOOTHING, DeckLines, clamp, dead_zone, num, state_integrator
@@ -26,6 +28,10 @@ def actuator(d: DeckLines, plant: PlantParams, bench: BenchProfile, ideal: bool)
     lag or lag with a zero, force limit) and, when the track has them, its limit switches."""
     act = bench.actuator
     uc = f"v({CONTROL_NODE})"
+    motor = motor_of(act)
+    if motor is not None:
+        _motor(d, plant, bench, motor, ideal)
+        return
     if ideal:
         d.comment(f"Actuator: ideal gain K_U = {act.K_U} N/V")
         d.add(f"B_force {FORCE_NODE} 0 V = {num(act.K_U)}*{uc}")
@@ -45,13 +51,39 @@ def actuator(d: DeckLines, plant: PlantParams, bench: BenchProfile, ideal: bool)
         state_integrator(d, "a_lag", f"(v(a_dz) - v(a_lag))/{num(act.tau)}", 0.0)
         raw = f"{num(act.K_U / act.tau)}*(v(a_dz) - v(a_lag))"
     d.add(f"B_force_raw a_raw 0 V = {raw}")
-    force = clamp("v(a_raw)", act.force_limit_N)
-    if bench.track.limit_switches:
-        half, w = num(plant.d / 2), num(SMOOTHING * plant.d / 2)
-        s = f"v({STATE_NODES['s']})"
-        d.comment(f"Limit switches at +/- d/2 = {plant.d / 2} m cut motor power")
-        force = f"({force})*0.25*(1+tanh(({half}-{s})/{w}))*(1+tanh(({half}+{s})/{w}))"
-    d.add(f"B_force {FORCE_NODE} 0 V = {force}")
+    d.add(f"B_force {FORCE_NODE} 0 V = {_switched(d, plant, bench, clamp('v(a_raw)', act.force_limit_N))}")
+
+
+def _switched(d: DeckLines, plant: PlantParams, bench: BenchProfile, force: str) -> str:
+    """The force with the limit switches cutting it at +/- d/2, when the track has them."""
+    if not bench.track.limit_switches:
+        return force
+    half, w = num(plant.d / 2), num(SMOOTHING * plant.d / 2)
+    s = f"v({STATE_NODES['s']})"
+    d.comment(f"Limit switches at +/- d/2 = {plant.d / 2} m cut motor power")
+    return f"({force})*0.25*(1+tanh(({half}-{s})/{w}))*(1+tanh(({half}+{s})/{w}))"
+
+
+def _motor(d: DeckLines, plant: PlantParams, bench: BenchProfile, motor: DCMotor, ideal: bool) -> None:
+    """A DC motor driven by voltage (patchgen.plant.drive): the amplifier's limit on K_U u_c (none
+    when ideal), the back-EMF's b s_dot taken from it, through the electrical lag when it has one;
+    the rotor's mass is on the cart (cart_pendulum's plant)."""
+    act = bench.actuator
+    uc, sd = f"v({CONTROL_NODE})", f"v({STATE_NODES['s_dot']})"
+    emf, lag = motor.back_emf_damping(), 0.0 if ideal else motor.electrical_lag()
+    d.comment(f"Actuator ({bench.id}): dc_motor, K_U {act.K_U:.6g} N/V, back-EMF {emf:.6g} N s/m, electrical lag "
+              f"{lag:g} s" + ("" if ideal else f", dead zone +/-{act.dead_zone_V} V, amplifier limit "
+                                              f"+/-{act.V_limit} V"))
+    if ideal:
+        command = f"{num(act.K_U)}*{uc}"
+    else:
+        d.add(f"B_deadzone a_dz 0 V = {dead_zone(uc, act.dead_zone_V) if act.dead_zone_V > 0 else uc}")
+        command = clamp(f"{num(act.K_U)}*v(a_dz)", act.force_limit_N)
+    net = f"{command}-{num(emf)}*{sd}"
+    if lag > 0:
+        state_integrator(d, "a_lag", f"(({net}) - v(a_lag))/{num(lag)}", 0.0)
+        net = "v(a_lag)"
+    d.add(f"B_force {FORCE_NODE} 0 V = {net if ideal else _switched(d, plant, bench, net)}")
 
 
 def disturbances(d: DeckLines, pushes: Sequence[Disturbance]) -> dict[str, str]:

@@ -16,6 +16,11 @@ The changes, each made only where it changes something:
 - **theta weighted harder**, its weight times THETA_STEPS squared (a Bryson excursion divided by
   THETA_STEPS): a higher loop gain shrinks the limit cycle the bench's dead zone drives (the
   lesson of the shipped bench-recommended design), at the price of larger gains.
+- **the command weighted harder** on a bench without a dead zone, first: R times THETA_STEPS
+  squared (a Bryson force times THETA_STEPS). A stiff law asks a release more than the
+  actuator's limit (a Quanser IP02 with Quanser's own weights asks 33 V of a 10 V amplifier from
+  10 deg), and the law's summers leave the reference before its command reaches the limit; a
+  softer law keeps them inside. Then theta weighted harder, as above.
 
 The bench's actuator designed in is already one of the spec's own realisations (recommend's
 candidate_specs), so every variant is tried with both actuator models too.
@@ -180,17 +185,43 @@ def tiers(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, below:
     """
     changes = structural(spec, machine, below)
     dz = bench.actuator.dead_zone_V
-    out = []
-    for step in (1.0, *THETA_STEPS):
-        weighted = spec if step == 1.0 else tighten_theta(spec, step)
+    steps = [(1.0, spec, {}, "")]
+    if dz == 0:
+        steps += [(k, soften_command(spec, k), _command_whys(k, bench), f"command weighted x{k * k:g}")
+                  for k in THETA_STEPS]
+    for k in THETA_STEPS:
+        weighted = tighten_theta(spec, k)
         if weighted is None:
             break
-        weigh = {} if step == 1.0 else _weight_whys(step, dz)
+        steps.append((k, weighted, _weight_whys(k, dz), f"theta weighted x{k * k:g}"))
+    out = []
+    for step, weighted, weigh, label in steps:
         for size in range(1 if step == 1.0 else 0, len(changes) + 1):
-            tier = [_variant(weighted, combo, step, weigh) for combo in itertools.combinations(changes, size)]
+            tier = [_variant(weighted, combo, label, weigh) for combo in itertools.combinations(changes, size)]
             if tier:
                 out.append(tier)
     return out
+
+
+def soften_command(spec: DesignSpec, step: float) -> DesignSpec:
+    """The spec with the control weight times ``step`` squared (a Bryson force times ``step``)."""
+    w = spec.weights
+    if w.bryson is not None:
+        upd = {"bryson": {**w.bryson, "u": _clean(w.bryson["u"] * step)}}
+    elif w.R_V is not None:
+        upd = {"R_V": _clean(w.R_V * step**2)}
+    else:
+        upd = {"R": _clean(w.R * step**2)}
+    return spec.model_copy(update={"weights": w.model_copy(update=upd)})
+
+
+def _command_whys(step: float, bench: BenchProfile) -> dict[str, str]:
+    """Why the control weight went up, by the fields that carry it."""
+    limit = (f"the amplifier's +/-{bench.actuator.V_limit:g} V" if bench.actuator.model == "dc_motor"
+             else f"the actuator's {bench.actuator.force_limit_N:g} N")
+    why = (f"the command weighted x{step * step:g}: a softer law asks less of {limit} and keeps the law's summers "
+           "inside the machine's reference where a stiff one leaves it before the command reaches the limit")
+    return {"weights.R": why, "weights.R_V": why, "weights.bryson.u": why}
 
 
 def _weight_whys(step: float, dead_zone_V: float) -> dict[str, str]:
@@ -202,7 +233,7 @@ def _weight_whys(step: float, dead_zone_V: float) -> dict[str, str]:
     return {"weights.Q.theta": why, "weights.bryson.theta": why, "weights.Q": why}
 
 
-def _variant(spec: DesignSpec, combo: Sequence[tuple], step: float, weigh: dict[str, str]) -> Variant:
+def _variant(spec: DesignSpec, combo: Sequence[tuple], label: str, weigh: dict[str, str]) -> Variant:
     """One tier's variant: the weighted spec with the structural changes of ``combo``."""
     whys = dict(weigh)
     names = []
@@ -211,6 +242,6 @@ def _variant(spec: DesignSpec, combo: Sequence[tuple], step: float, weigh: dict[
         names.append(name)
         for k, v in why.items():
             whys[k] = f"{whys[k]}; {v}" if k in whys else v
-    if step != 1.0:
-        names.append(f"theta weighted x{step * step:g}")
+    if label:
+        names.append(label)
     return Variant(", ".join(names), spec, whys)

@@ -65,7 +65,10 @@ def test_bad_scenario_field_one_line(tmp_path):
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
 @pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "designs").glob("*.toml")))
 def test_spice_ideal_agrees_within_one_percent(tmp_path, name):
-    r = run("spice", name, "--scenario", "offset-10deg", "--ideal", "-o",
+    # the ideal run does not clip: a scenario in which the patch stays inside the reference (a patch
+    # of Quanser's own weights asks 33 V from 10 deg and leaves it; a tap on its bench does not)
+    scenario = {"quanser-ip02": "ip02-tap"}.get(name, "offset-10deg")
+    r = run("spice", name, "--scenario", scenario, "--ideal", "-o",
             str(tmp_path), "--json", "--svg")
     if r.returncode == 2:  # a design that does not fit the machine: the one-line resource error
         assert "needs" in r.stderr and len(r.stderr.strip().splitlines()) == 1

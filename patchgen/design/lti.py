@@ -29,6 +29,7 @@ import numpy as np
 
 from patchgen.design.controller import Controller
 from patchgen.design.lqg import Design, design_on, loop_with_controller
+from patchgen.inputs.drive_fields import motor_of
 from patchgen.inputs.spec import DesignSpec, load_spec
 
 if TYPE_CHECKING:  # pragma: no cover - for annotations only
@@ -63,7 +64,8 @@ def _controller(d: Design) -> tuple[Controller, tuple[str, ...]]:
     return _state_feedback_controller(d), _plant_part(d)[1]
 
 
-def plant_ss(design: Design, outputs: str | tuple[str, ...] | None = None) -> control.StateSpace:
+def plant_ss(design: Design, outputs: str | tuple[str, ...] | None = None,
+             input: Literal["u", "u_c", "V_m"] = "u") -> control.StateSpace:
     """The plant the compensator drives, as a named ``control.StateSpace``.
 
     Parameters
@@ -74,13 +76,18 @@ def plant_ss(design: Design, outputs: str | tuple[str, ...] | None = None) -> co
         Plant states to output (``"s"`` for the transfer function s/u, say). By default the
         signals the compensator reads: s, theta, s_dot when the design has an estimator, every
         plant state for plain state feedback.
+    input : {"u", "u_c", "V_m"}
+        The input's unit: ``"u"`` the force command (N); ``"u_c"`` the command voltage (V, u =
+        K_U u_c); ``"V_m"`` the motor's voltage (V) of a design driven by a ``dc_motor``, as a
+        lab driving its cart by voltage (a Quanser IP02) states its model.
 
     Returns
     -------
     control.StateSpace
         States s, theta, s_dot, theta_dot (SI units) and, when the design models the actuator,
-        ``actuator``; input ``u``, the force command (N); outputs named by state. The design's
-        integral states are not part of the plant: they are integrators in the compensator.
+        ``actuator``; input named as ``input``; outputs named by state. The design's
+        integral states are not part of the plant: they are integrators in the compensator. A
+        dc_motor's rotor and back-EMF are in A (patchgen.plant.drive).
 
     Notes
     -----
@@ -97,12 +104,27 @@ def plant_ss(design: Design, outputs: str | tuple[str, ...] | None = None) -> co
     if unknown:
         raise ValueError(f"not plant states: {', '.join(unknown)} (plant states: {', '.join(names)})")
     A = design.model.A[np.ix_(keep, keep)]
-    B = design.model.B[keep]
+    B = design.model.B[keep] * _newtons_per(design, input)
     C = np.zeros((len(outputs), len(keep)))
     for r, o in enumerate(outputs):
         C[r, names.index(o)] = 1.0
-    return control.ss(A, B, C, np.zeros((len(outputs), 1)), states=list(names), inputs=[LOOP_INPUT],
+    return control.ss(A, B, C, np.zeros((len(outputs), 1)), states=list(names), inputs=[input],
                       outputs=list(outputs), name=f"{design.spec.name}_plant")
+
+
+def _newtons_per(design: Design, unit: str) -> float:
+    """The force command (N) per unit of ``unit``: 1 for u, K_U for u_c, a for a motor's V_m."""
+    if unit == "u":
+        return 1.0
+    if unit == "u_c":
+        return design.spec.actuator.K_U
+    if unit == "V_m":
+        motor = motor_of(design.spec.actuator)
+        if motor is None:
+            raise ValueError(f"input 'V_m' is a motor's voltage: {design.spec.name}'s actuator is "
+                             f"{design.spec.actuator.model}, not a dc_motor")
+        return motor.force_per_volt()
+    raise ValueError(f"input must be 'u', 'u_c' or 'V_m' (got {unit!r})")
 
 
 def compensator_ss(design: Design) -> control.StateSpace:

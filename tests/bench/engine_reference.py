@@ -39,7 +39,8 @@ def reference_runs(cfg: EngineConfig, draws: Draws, n_history: int = 1):
         gauss = (run_normals(keys[r, 0], keys[r, 1], st.steps, nch) if noisy
                  else np.zeros((0, 0)))
         _one_run(r, signs[r], gauss, st.dt, st.steps, st.stride, st.x0, plants[r],
-                 st.limit_switches, sensors.state, draws.sensor_gains[r], noise.a[:ns], std[r, :ns],
+                 st.limit_switches, sensors.state, draws.sensor_gains[r], sensors.quantum, sensors.filt,
+                 sensors.source, sensors.wn, sensors.zeta, noise.a[:ns], std[r, :ns],
                  w.kind, w.in_ptr, w.in_src, w.in_gain, w.param1, w.param2, w.ic, w.drift,
                  noise.a[ns:ns + n_amp], std[r, ns:ns + n_amp], noise.a[ns + n_amp:],
                  std[r, ns + n_amp:], st.saturation, st.clip, st.output, st.actuator,
@@ -58,6 +59,13 @@ def plant_rhs(p, th, sd, thd, force, tip_force):
     Returns (ds, dtheta, ds_dot, dtheta_dot); p = (M, m, l, g, b_VF, c, ...)."""
     M, m, l, g, b, c = p[0], p[1], p[2], p[3], p[4], p[5]
     sn, cs = math.sin(th), math.cos(th)
+    J = p[7]
+    if J != 0.0:  # a rigid pendulum: the Lagrangian's 2 x 2 mass matrix solved as it stands
+        a11, a12, a22 = M + m, m * l * cs, J + m * l * l
+        r1 = force - b * sd + m * l * sn * thd * thd + tip_force
+        r2 = m * g * l * sn - c * thd + tip_force * l * cs
+        det = a11 * a22 - a12 * a12
+        return sd, thd, (a22 * r1 - a12 * r2) / det, (a11 * r2 - a12 * r1) / det
     den = (M + m) - m * cs * cs
     bracket = -b * sd + m * l * thd * thd * sn + (c / l) * thd * cs - m * g * sn * cs + force
     sdd = (bracket + tip_force * sn * sn) / den
@@ -77,13 +85,24 @@ def _rail(out, sat, clip):
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
-def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_ptr, in_src,
-             in_gain, param1, param2, drift, sat, clip, sig, raw, dz_out):
+def _count(x, quantum):
+    """An encoder's reading: x to the nearest whole count (quantum 0: x)."""
+    if quantum == 0.0:
+        return x
+    return quantum * math.floor(x / quantum + 0.5)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _circuit(xt, zt, xft, s_ref, nz_s, nz_a, sensor_state, sensor_gain, quantum, filt, amp_kind, in_ptr,
+             in_src, in_gain, param1, param2, drift, sat, clip, sig, raw, dz_out):
     """Evaluate sensors and amplifiers in order: sig (clipped if clip), raw (before clipping),
-    and the amplifier state derivatives into dz_out."""
+    and the amplifier state derivatives into dz_out. A filtered sensor reads its filter's rate."""
     ns = sensor_state.shape[0]
     for i in range(ns):
-        q = xt[sensor_state[i]]
+        if filt[i] >= 0:
+            sig[i] = sensor_gain[i] * xft[2 * filt[i] + 1] + nz_s[i]
+            continue
+        q = _count(xt[sensor_state[i]], quantum[i])
         if sensor_state[i] == S_INDEX:
             q -= s_ref
         sig[i] = sensor_gain[i] * q + nz_s[i]
@@ -123,7 +142,7 @@ def _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_
 
 @nb.njit(cache=True, error_model="numpy", fastmath=_FAST)
 def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
-             sensor_state, sensor_gain, sna, sns,
+             sensor_state, sensor_gain, quantum, filt, source, wn, zeta, sna, sns,
              amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, fna, fns, sat, clip,
              out_index, act, K_U, tau, dz, flim, emf,
              dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
@@ -146,6 +165,16 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
             nz_f[k] = gauss[0, ns + na + k] * fns[k] / math.sqrt(1.0 - fna[k] * fna[k])
     xp = x0.copy()
     za = ic.copy()
+    nf = 0
+    for i in range(ns):
+        nf = max(nf, filt[i] + 1)
+    xf = np.zeros(2 * nf)  # each velocity filter's (y, y'), settled on the run's start
+    for i in range(ns):
+        if filt[i] >= 0:
+            xf[2 * filt[i]] = _count(x0[source[i]], quantum[i])
+            xf[2 * filt[i] + 1] = x0[sensor_state[i]]
+    kf = np.zeros((4, 2 * nf))
+    xft = np.zeros(2 * nf)
     sig = np.zeros(ns + na)
     raw = np.zeros(na)
     kp = np.zeros((4, 4))  # RK4 slopes of the plant, amplifier and actuator states
@@ -158,7 +187,7 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
     quiet_s = np.zeros(ns)
     quiet_a = np.zeros(na)
     for _ in range(na):
-        _circuit(xp, za, 0.0, quiet_s, quiet_a, sensor_state, sensor_gain, amp_kind, in_ptr,
+        _circuit(xp, za, xf, 0.0, quiet_s, quiet_a, sensor_state, sensor_gain, quantum, filt, amp_kind, in_ptr,
                  in_src, in_gain, param1, param2, drift, sat, False, sig, raw, zt)
         for j in range(na):
             if amp_kind[j] == DIFFERENTIATOR:
@@ -205,6 +234,8 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
                     xt[i] = xp[i]
                 for j in range(na):
                     zt[j] = za[j]
+                for i in range(2 * nf):
+                    xft[i] = xf[i]
                 xat = xa
             else:
                 c = h if st == 3 else 0.5 * h
@@ -212,8 +243,16 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
                     xt[i] = xp[i] + c * kp[st - 1, i]
                 for j in range(na):
                     zt[j] = za[j] + c * ka[st - 1, j]
+                for i in range(2 * nf):
+                    xft[i] = xf[i] + c * kf[st - 1, i]
                 xat = xa + c * kx[st - 1]
-            _circuit(xt, zt, s_ref, nz_s, nz_a, sensor_state, sensor_gain, amp_kind, in_ptr,
+            for i in range(ns):  # y'' = wn^2 (counted position - y) - 2 zeta wn y'
+                k = filt[i]
+                if k >= 0:
+                    kf[st, 2 * k] = xft[2 * k + 1]
+                    kf[st, 2 * k + 1] = (wn[i] * wn[i] * (_count(xt[source[i]], quantum[i]) - xft[2 * k])
+                                         - 2.0 * zeta[i] * wn[i] * xft[2 * k + 1])
+            _circuit(xt, zt, xft, s_ref, nz_s, nz_a, sensor_state, sensor_gain, quantum, filt, amp_kind, in_ptr,
                      in_src, in_gain, param1, param2, drift, sat, clip, sig, raw, ka[st])
             uc = sig[out_index]
             v = 0.0
@@ -304,6 +343,8 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
                     za[j] = -sat
                     pinned[j] = True
         xa += h / 6.0 * (kx[0] + 2.0 * kx[1] + 2.0 * kx[2] + kx[3])
+        for i in range(2 * nf):
+            xf[i] += h / 6.0 * (kf[0, i] + 2.0 * kf[1, i] + 2.0 * kf[2, i] + kf[3, i])
         if limit_on and not tripped and abs(xp[0]) >= half:
             tripped = True
             trip_t[r] = t + h

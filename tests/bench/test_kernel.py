@@ -97,6 +97,8 @@ CASES = {  # held with noise and drift; tripped with overloads; ideal with a pus
     "trip": ("thesis-ch5", "offset-10deg", False, None, None),
     "ideal": ("thesis-ch5", "finger-push", True, None, None),
     "spread": ("bench-recommended", "step-cart", False, {"M": 0.2, "l": 0.2, "b_VF": 0.2}, None),
+    # a motor at its amplifier's limit, encoder counts, a filtered velocity; the rigid pendulum
+    "motor": ("quanser-ip02", "ip02-release-5deg", False, None, 3.0),
 }
 
 
@@ -118,6 +120,8 @@ def test_blocks_match_the_per_run_loop(case):
     np.testing.assert_allclose(new.history[0, :k], ref["history"][0, :k], rtol=1e-9, atol=1e-9)
     if case == "trip":
         assert not np.isnan(new.trip_time).any() and not np.isnan(new.overload_first).all()
+    if case == "motor":  # the paths the case is for were taken
+        assert (new.limit_time > 0).all() and cfg.sensors.quantum.any() and (cfg.sensors.filt >= 0).any()
 
 
 def test_a_run_is_the_same_in_any_block_and_on_any_number_of_threads():

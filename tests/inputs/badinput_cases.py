@@ -52,6 +52,7 @@ class Case:
 SPEC = "@TMP@/spec.toml"
 LAG = shipped("designs", "bench-recommended")  # lag actuator, Bryson weights, filtered differentiator
 KAL = shipped("designs", "thesis-case1")  # gain actuator, Q and R, integrators, Kalman estimator
+MOT = shipped("designs", "quanser-ip02")  # a DC motor driven by voltage, a rigid pendulum, R_V
 
 
 def patch_argv(spec: str = SPEC) -> tuple[str, ...]:
@@ -101,9 +102,19 @@ SPEC_FIELDS_KAL = {
 }
 
 
+SPEC_FIELDS_MOTOR = {
+    "actuator.R_m": Num(1e-3, 1e3), "actuator.K_t": Num(1e-5, 10), "actuator.K_m": Num(1e-5, 10),
+    "actuator.r_pinion": Num(1e-4, 1), "actuator.K_g": Num(0.01, 1e3, required=False),
+    "actuator.J_m": Num(0, 1, required=False), "actuator.eta_g": Num(0.01, 1, required=False),
+    "actuator.eta_m": Num(0.01, 1, required=False), "actuator.amp_gain": Num(0.01, 100, required=False),
+    "weights.R_V": Num(1e-8, 1e8, required=False),  # missing: named at weights.R (either will do)
+}
+
+
 def spec_cases() -> list[Case]:
     out = field_cases("lag-", LAG, SPEC_FIELDS_LAG, spec_case)
     out += field_cases("kal-", KAL, SPEC_FIELDS_KAL, spec_case)
+    out += field_cases("motor-", MOT, SPEC_FIELDS_MOTOR, spec_case)
     # numbers whose field is a union with a word
     for name, new in {"zero": 0.0, "negative": -1.0, "nan": math.nan, "inf": math.inf, "string": "fast",
                       "bool": True, "huge": 1e300}.items():
@@ -152,6 +163,13 @@ def _crossfield_cases() -> list[Case]:
     lz = with_field(with_field(KAL, "actuator.model", "lag_zero"), "actuator.tau", 0.2)
     lz = with_field(with_field(lz, "actuator.zero", 0.0), "weights.Q.actuator", 1.0)
     cases["lag_zero-at-origin"] = (lz, "actuator.zero")
+    cases |= {  # a DC motor's figures: K_U follows from them, only a dc_motor has them, it has no lag
+        "motor-K_U-given": (with_field(MOT, "actuator.K_U", 3.0), "actuator.K_U"),
+        "motor-tau": (with_field(MOT, "actuator.tau", 0.01), "actuator.tau"),
+        "motor-figure-on-lag": (with_field(LAG, "actuator.R_m", 2.6), "actuator.R_m"),
+        "motor-amp-on-gain": (with_field(KAL, "actuator.amp_gain", 1.0), "actuator.amp_gain"),
+        "motor-R-and-R_V": (with_field(MOT, "weights.R", 0.1), "weights.R_V"),
+    }
     return [spec_case(k, data, f) for k, (data, f) in cases.items()]
 
 

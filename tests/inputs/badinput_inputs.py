@@ -93,6 +93,7 @@ def scenario_cases() -> list[Case]:
 GP6 = shipped("profiles/machines", "gp6")
 THAT = shipped("profiles/machines", "the-analog-thing")
 UW = shipped("profiles/benches", "uw-1991")
+IP02 = shipped("profiles/benches", "quanser-ip02")
 MP, BP = "@TMP@/m.toml", "@TMP@/b.toml"
 WITH_M = dumps(with_field(LAG, "machine", MP))
 WITH_B = dumps(with_field(LAG, "bench", BP))
@@ -136,6 +137,13 @@ BENCH_FIELDS = {
     "sensors.s": Num(1e-3, 1e3), "sensors.theta": Num(1e-3, 1e3), "sensors.s_dot": Num(1e-3, 1e3),
     "sensors.noise_V_rms.s": Num(0, 100, required=False),
     "sensors.noise_bandwidth_Hz": Num(1e-3, 1e9, required=False), "track.limit_switches": bool,
+}
+BENCH_FIELDS_MOTOR = {  # a motor, encoders, a filtered velocity
+    "actuator.R_m": Num(1e-3, 1e3), "actuator.K_t": Num(1e-5, 10), "actuator.K_m": Num(1e-5, 10),
+    "actuator.r_pinion": Num(1e-4, 1), "actuator.V_limit": Num(1e-3, 1e4),
+    "actuator.amp_gain": Num(0.01, 100, required=False),
+    "sensors.counts_per_m.s": Num(1, 1e9, required=False), "sensors.counts_per_rev.theta": Num(4, 1e9, required=False),
+    "sensors.velocity_filter.s_dot.wn_rad_s": Num(1, 1e5), "sensors.velocity_filter.s_dot.zeta": Num(0.05, 10),
 }
 
 
@@ -203,6 +211,15 @@ def profile_cases() -> list[Case]:
     }
     out += [machine_case(k, data, f) for k, (data, f) in shapes.items()]
     out += field_cases("", UW, BENCH_FIELDS, bench_case)
+    out += field_cases("ip02-", IP02, BENCH_FIELDS_MOTOR, bench_case)
+    out += [bench_case("ip02-force-limit-given", with_field(IP02, "actuator.force_limit_N", 5.0),
+                       "actuator.force_limit_N"),
+            bench_case("ip02-counts-of-a-rate", with_field(IP02, "sensors.counts_per_m.s_dot", 100.0),
+                       "sensors.counts_per_m.s_dot"),
+            bench_case("ip02-filter-of-a-position", with_field(IP02, "sensors.velocity_filter.theta",
+                                                               {"wn_rad_s": 60.0, "zeta": 0.9}),
+                       "sensors.velocity_filter.theta"),
+            bench_case("ip02-inductance-on-lag", with_field(UW, "actuator.L_m", 1e-3), "actuator.L_m")]
     out += [bench_case("tau-short", with_field(UW, "actuator.tau", 1e-5), "actuator.tau"),
             bench_case("noise-unknown-sensor", with_field(UW, "sensors.noise_V_rms.theta_dot", 0.1),
                        "sensors.noise_V_rms.theta_dot"),

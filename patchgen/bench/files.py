@@ -14,11 +14,12 @@ import math
 import numpy as np
 
 from patchgen.bench.results import SimResult
+from patchgen.plant.cart_pendulum import POSITION, STATE_UNITS
 from patchgen.render import plot_helper
 
 FONT_SIZE = 8  # points: the plot's text, small enough for a panel 1.5 inches high
-_UNITS = {"t": "s", "s": "m", "theta": "rad", "s_dot": "m_per_s", "theta_dot": "rad_per_s",
-          "s_ref": "m", "u_c": "V", "force": "N"}
+_UNITS = {"t": "s", **{q: u.replace("/", "_per_") for q, u in STATE_UNITS.items()},  # a column name's unit
+          "s_ref": STATE_UNITS[POSITION], "u_c": "V", "force": "N"}
 
 
 def output_files(result: SimResult, svg: bool = False) -> dict[str, bytes]:
@@ -72,13 +73,15 @@ def _runs_csv(result: SimResult) -> str:
     drawn = [name for name, _ in result.runs[0].drawn] if result.runs else []
     w.writerow(["run", "held", "limit_switch_tripped", "trip_time_s", "fallen",
                 "fall_time_s", "max_abs_theta_deg", "max_abs_s_m", "rms_theta_deg",
-                "max_abs_u_c_V", "max_abs_force_N", "overloads"] + [f"drawn {n}" for n in drawn])
+                "max_abs_u_c_V", "max_abs_force_N", "overloads", "actuator_limit_time_s"]
+               + [f"drawn {n}" for n in drawn])
     for r in result.runs:
         w.writerow([r.run, int(r.held), int(r.limit_switch_tripped), _num(r.trip_time_s),
                     int(r.fallen), _num(r.fall_time_s), _num(r.max_abs_theta_deg),
                     _num(r.max_abs_s_m), _num(r.rms_theta_deg), _num(r.max_abs_u_c_V),
                     _num(r.max_abs_force_N),
-                    " ".join(f"{o.amplifier}@{_num(o.first_time_s)}" for o in r.overloads)]
+                    " ".join(f"{o.amplifier}@{_num(o.first_time_s)}" for o in r.overloads),
+                    _num(r.actuator_limit_time_s)]
                    + [_num(v) for _, v in r.drawn])
     return buf.getvalue()
 

@@ -72,6 +72,8 @@ def summary_table(result: SimResult) -> Table:
         ("max |u_c| (V)", f"{r0.max_abs_u_c_V:.2f}", _p(d, "max_abs_u_c_V")),
         ("overloads (amplifier at time)", ", ".join(f"{o.amplifier} at {o.first_time_s:.2f} s" for o in r0.overloads)
          or "none", f"{100 * d.fraction_overloaded:.1f} %"),
+        ("command at its limit (s)", f"{r0.actuator_limit_time_s:.2f}",
+         f"{100 * d.fraction_at_actuator_limit:.1f} % of runs"),
     ]
     for row in rows:
         t.add_row(*(row if d.runs > 1 else row[:2]))

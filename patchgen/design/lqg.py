@@ -21,6 +21,7 @@ from patchgen.design.precision import GainSpread
 from patchgen.design.riccati import design_spread, filter_gain, filter_inputs, lqr_gain
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.spec import DesignSpec, q_matrix, r_matrix
+from patchgen.plant.cart_pendulum import ESTIMATED_RATE
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
@@ -174,9 +175,9 @@ def differentiator_controller(model: LinearModel, K: np.ndarray, rolloff: float)
     it = my.index("theta")
     Ac[0, 0] = -1.0 / rolloff
     Bc[0, it] = 1.0 / rolloff
-    for st in ("s", "theta", "s_dot"):
+    for st in my:
         Dc[0, my.index(st)] -= K[0, model.index(st)]
-    kd = K[0, model.index("theta_dot")]
+    kd = K[0, model.index(ESTIMATED_RATE)]
     Dc[0, it] -= kd / rolloff
     Cc[0, 0] += kd / rolloff
     for r in range(len(inames)):

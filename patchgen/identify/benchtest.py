@@ -20,6 +20,7 @@ from patchgen.identify.figures import (
     ASSUMED_DISTANCE_UNCERTAINTY_M,
     ASSUMED_TIME_UNCERTAINTY_S,
 )
+from patchgen.plant.cart_pendulum import MEASURED
 from patchgen.plant.compiled import plant_vector
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
@@ -162,9 +163,9 @@ def bench_test_files(plant: PlantParams, bench: BenchProfile, machine: MachinePr
     r = rng(8)
     qdt = 1.0 / max(1000.0, QUIET_OVERSAMPLING * sens.noise_bandwidth_Hz)
     cols = [np.arange(QUIET_SAMPLES) * qdt]
-    for k in ("s", "theta", "s_dot"):
+    for k in MEASURED:
         cols.append(motion.coloured(r, nrms(k), sens.noise_bandwidth_Hz, qdt, QUIET_SAMPLES))
-    files["quiet.csv"] = _csv("quiet", ("t_s", "s_V", "theta_V", "s_dot_V"), cols,
+    files["quiet.csv"] = _csv("quiet", ("t_s", *(f"{k}_V" for k in MEASURED)), cols,
                               "cart and pendulum clamped at rest, motor off; " + about)
     r = rng(9)
     n = int(round(DRIFT_DURATION_S / DRIFT_DT_S))

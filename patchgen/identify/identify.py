@@ -31,6 +31,7 @@ from patchgen.identify.kalman import FitError
 from patchgen.identify.plausible import check_fit
 from patchgen.identify.recording import Recording, expand, read_recording
 from patchgen.inputs.errors import InputError
+from patchgen.plant.cart_pendulum import MEASURED
 from patchgen.profiles.bench import BenchProfile
 
 FITTED_COLUMN = {"actuator_step": "force_N", "actuator_ramp": "force_N", "coast_down": "s_dot_V",
@@ -254,7 +255,7 @@ def _sensors(result: Identification, base: BenchProfile, k_s: float) -> None:
         result.bench["sensors.s_dot"] = Parameter(value, est.unit, est, est.source)
     else:
         result.bench["sensors.s_dot"] = Parameter(base.sensors.s_dot, "V/(m/s)", None, f"base profile {result.base}")
-    for s in ("s", "theta", "s_dot"):
+    for s in MEASURED:
         found = _pick(result.fits, ("quiet",), f"noise_{s}")
         if found:
             est = _combined(result, found, f"noise on {s}")

@@ -13,7 +13,7 @@ from patchgen.identify.identify import MIN_LAG_S, Identification, Parameter
 from patchgen.identify.plausible import field_bounds
 from patchgen.inputs.spec import PlantSpec
 from patchgen.inputs.validation import validate
-from patchgen.plant.cart_pendulum import PARAMETER_NAMES, UNCERTAIN
+from patchgen.plant.cart_pendulum import MEASURED, PARAMETER_NAMES, UNCERTAIN
 from patchgen.profiles.bench import BenchActuator, BenchProfile, BenchSensors, check_bench
 from patchgen.profiles.uncertainty import RANGE_FIELDS as RANGED_FIELDS
 
@@ -63,7 +63,7 @@ def profile_data(result: Identification, base: BenchProfile, bench_id: str, name
     b = result.bench
     act = {k.removeprefix("actuator."): p.value for k, p in b.items() if k.startswith("actuator.")}
     noise = {k.rsplit(".", 1)[1]: p.value for k, p in b.items() if k.startswith("sensors.noise_V_rms.")}
-    sens = {"s": b["sensors.s"].value, "theta": b["sensors.theta"].value, "s_dot": b["sensors.s_dot"].value,
+    sens = {**{q: b[f"sensors.{q}"].value for q in MEASURED},
             "noise_V_rms": noise, "noise_bandwidth_Hz": b["sensors.noise_bandwidth_Hz"].value}
     data = {"id": bench_id, "name": name, "actuator": act, "sensors": sens,
             "track": base.track.model_dump(), "disturbance": base.disturbance.model_dump()}
@@ -133,7 +133,7 @@ def bench_toml(result: Identification, base: BenchProfile, bench_id: str, name: 
         v = data["actuator"][key]
         out.append(_line(f"{key} = {json.dumps(v) if isinstance(v, str) else _num(v)}", _comment(p)))
     out += ["", "[sensors]"]
-    for key in ("s", "theta", "s_dot"):
+    for key in MEASURED:
         out.append(_line(f"{key} = {_num(data['sensors'][key])}", _comment(b[f"sensors.{key}"])))
     noise = data["sensors"]["noise_V_rms"]
     out.append("noise_V_rms = { " + ", ".join(f"{k} = {_num(v)}" for k, v in noise.items()) + " }")

@@ -36,17 +36,25 @@ from patchgen.identify.cells import (
 )
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.inputfile import decode_text, read_bytes
+from patchgen.plant.cart_pendulum import MEASURED, RATE_OF, STATE_UNITS, STATES
 
 MAX_RECORDING_BYTES = 64 << 20  # 64 MiB: ten minutes of four channels at 2 kHz is some 40 MB of text
 CLOCK_TOLERANCE = 0.01  # a sample interval may differ from the median by 1 %: a recorder's clock, not a gap
+
+def _measured(q: str) -> tuple[tuple[str, ...], str]:
+    """The units a measured quantity may be recorded in, and what it is: a position on its sensor
+    (V) or set by hand (SI); a rate on its sensor alone."""
+    what, unit = next(st.what for st in STATES if st.name == q), STATE_UNITS[q]
+    if q in RATE_OF:
+        return ("V", unit), f"{what}: its sensor's voltage (V) or a value set by hand ({unit})"
+    return ("V",), f"{what}: its sensor's voltage"
+
 
 QUANTITIES = {  # quantity -> the units it may be recorded in, and what it is
     "t": (("s",), "time"),
     "u_c": (("V",), "the actuator's command voltage"),
     "force": (("N",), "the force on the cart read on a force gauge"),
-    "s": (("V", "m"), "the cart position: the pot's voltage (V) or a position set by hand (m)"),
-    "theta": (("V", "rad"), "the pendulum angle: the pot's voltage (V) or an angle set by hand (rad)"),
-    "s_dot": (("V",), "the tachometer's voltage"),
+    **{q: _measured(q) for q in MEASURED},
     "out": (("V",), "an amplifier's output"),
 }
 

@@ -18,10 +18,8 @@ from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded, zero_or_at_least
 from patchgen.inputs.resources import resolve
 from patchgen.inputs.validation import read_toml, validate
-from patchgen.plant.cart_pendulum import PARAMETERS
+from patchgen.plant.cart_pendulum import MEASURED, PARAMETERS
 from patchgen.plant.equations import PLANT_STATES
-
-MEASURED = ("s", "theta", "s_dot")
 
 # weights: Q entries and R within WEIGHT_RANGE (a weight is relative, and a spread of more than
 # 1e16 between them leaves the Riccati solver little but rounding error); Bryson excursions
@@ -59,6 +57,9 @@ class SensorSpec(InputModel):
     theta: Real = bounded(*SENSOR_RANGE, description="V/rad")
     s_dot: Real = bounded(*SENSOR_RANGE, description="V/(m/s)")
     theta_dot: Real | None = bounded(*SENSOR_RANGE, default=None, description="V/(rad/s); default theta x 1 s")
+    labels: dict[Literal[MEASURED], Annotated[str, Field(min_length=1, max_length=80)]] = Field(
+        default_factory=dict, description="what reads each quantity, as the sheet names it (default: the thesis "
+                                          "bench's pots and tachometer)")
 
     def constants(self) -> dict[str, float]:
         """Volts per SI unit of each measured quantity (MEASURED), by name."""

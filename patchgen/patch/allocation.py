@@ -24,7 +24,7 @@ from patchgen.inputs.errors import ResourceError
 from patchgen.patch import large_gains, polarity, time_scales
 from patchgen.patch.jacks import jacks_test, weight_for
 from patchgen.patch.netlist import AmpInput, Amplifier, ControlOutput, Mode, Netlist, Pot, SensorInput, Signal
-from patchgen.patch.realization import SENSOR_LABELS, SENSOR_UNITS, Block, Realization, Term
+from patchgen.patch.realization import SENSOR_UNITS, Block, Realization, Term
 from patchgen.profiles.machine import MachineProfile, the_machine
 
 ROLE = {"sum": "summer", "integrate": "integrator", "differentiate": "differentiator", "lag": "lag"}
@@ -250,7 +250,7 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
           notes: list[str], wanted: dict[tuple[str, str, float], float], source: str) -> Netlist:
     slot = _assign_slots(stages, machine, source)
     res = machine.pot_resolution
-    sensors = [SensorInput(id=s, label=SENSOR_LABELS[s], quantity=s, unit=SENSOR_UNITS[s], volts_per_unit=v)
+    sensors = [SensorInput(id=s, label=real.label(s), quantity=s, unit=SENSOR_UNITS[s], volts_per_unit=v)
                for s, v in real.sensors.items()]
     blocks = {b.name: b for b in real.blocks}
 

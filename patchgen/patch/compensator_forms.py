@@ -293,7 +293,8 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
     notes = (f"compensator realised as one system: {c.method}, {c.order} states, {form} form; each state "
              f"scaled to at most {AMPLITUDE:g} of the reference over a {math.degrees(SCALING_THETA0_RAD):g} deg "
              f"release and a {SCALING_S0_M:g} m cart offset",)
-    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, notes)
+    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, notes,
+                       dict(spec.sensors.labels))
 
 
 def staged_blocks(blocks: list[Block], top: float, resolution: float) -> list[Block]:

@@ -19,17 +19,17 @@ its negative.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from patchgen.design.lqg import Design
+from patchgen.plant.cart_pendulum import ESTIMATED_RATE, MEASURED, SENSOR_LABELS
 from patchgen.plant.cart_pendulum import STATE_UNITS as PLANT_UNITS
 from patchgen.profiles.machine import MachineProfile
 
 STATE_UNITS = {**PLANT_UNITS, "int_s": "m s", "int_theta": "rad s", "actuator": "N"}
-SENSOR_UNITS = {k: STATE_UNITS[k] for k in ("s", "theta", "s_dot")}
-SENSOR_LABELS = {"s": "cart position pot", "theta": "pendulum angle pot", "s_dot": "motor tachometer"}
+SENSOR_UNITS = {k: STATE_UNITS[k] for k in MEASURED}
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,11 @@ class Realization:
     K_U: float
     below_resolution: str
     notes: tuple[str, ...] = ()
+    labels: dict[str, str] = field(default_factory=dict)  # sensor id -> what reads it, where the spec says
+
+    def label(self, sensor: str) -> str:
+        """What reads a sensor, as the sheet names it: the spec's word, else the thesis bench's instrument."""
+        return self.labels.get(sensor, SENSOR_LABELS[sensor])
 
     def block(self, name: str) -> Block:
         return next(b for b in self.blocks if b.name == name)
@@ -118,7 +123,8 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
                                 integrator_reach(machine)))
     terms = tuple(Term(s, -float(design.K[0, i]) / (scale[s] * KU)) for i, s in enumerate(states))
     blocks.append(Block("u_c", "sum", terms, 1.0, "V", "control voltage to the servo amplifier"))
-    return Realization(spec.name, ks, tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
+    return Realization(spec.name, ks, tuple(blocks), KU, spec.patch.below_resolution, tuple(notes),
+                       dict(spec.sensors.labels))
 
 
 def integrator_reach(machine: MachineProfile) -> float:
@@ -171,8 +177,7 @@ def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
     Ae, Be, Ce = model.submodel(est)
     L = design.estimator.L
     sc = spec.actuator.state_scale
-    sv = {"s": ks["s"], "theta": ks["theta"], "s_dot": ks["s_dot"], "theta_dot": spec.theta_dot_scale(),
-          "actuator": sc / KU}
+    sv = {**{q: ks[q] for q in MEASURED}, ESTIMATED_RATE: spec.theta_dot_scale(), "actuator": sc / KU}
     S = np.diag([sv[s] for s in est])
     Sy = np.diag([ks[m] for m in model.measured])
     Av = S @ (Ae - L @ Ce) @ np.linalg.inv(S)
@@ -192,7 +197,8 @@ def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
     sig = {s: (f"xhat_{s}" if s in est else s) for s in model.states}
     terms = tuple(Term(sig[s], -float(design.K[0, i]) / (scale[sig[s]] * KU)) for i, s in enumerate(model.states))
     blocks.append(Block("u_c", "sum", terms, 1.0, "V", "control voltage to the servo amplifier"))
-    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
+    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, tuple(notes),
+                       dict(spec.sensors.labels))
 
 
 def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
@@ -256,7 +262,8 @@ def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
         uterms.append(Term(f"what_{s}", -float(Kw[i]) / (beta * KU)))
     uterms += [Term(n, -design.gain(n) / (scale[n] * KU)) for n in model.states if n.startswith("int_")]
     blocks.append(Block("u_c", "sum", tuple(uterms), 1.0, "V", "control voltage to the servo amplifier"))
-    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, tuple(notes))
+    return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, tuple(notes),
+                       dict(spec.sensors.labels))
 
 
 def _exact(c: float, top: float) -> float:

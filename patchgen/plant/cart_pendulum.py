@@ -50,6 +50,12 @@ POSITION = "s"  # the state the limit switches and a step command act on
 ANGLE = "theta"  # the state whose excursion past the fall angle ends a run
 RATE_OF = {"s": "s_dot", "theta": "theta_dot"}  # each position-like state's rate
 POSITION_OF = {rate: position for position, rate in RATE_OF.items()}  # the position a rate is the rate of
+# What a lab's sensors read (the thesis's pots and tachometer; an IP02's encoders and filtered velocity):
+# the pendulum's rate is the patch's to find (a differentiator or an estimator)
+MEASURED = (POSITION, ANGLE, RATE_OF[POSITION])
+ESTIMATED_RATE = RATE_OF[ANGLE]
+# the instruments that read them on the thesis's bench, as a sheet names them (a spec may name its own)
+SENSOR_LABELS = dict(zip(MEASURED, ("cart position pot", "pendulum angle pot", "motor tachometer")))
 
 # Table B.1's parameters, within the bounds of a bench-sized cart and pendulum (docs/spec.md)
 PARAMETERS = (

@@ -14,6 +14,7 @@ from patchgen.inputs.fields import InputModel, Real, bounded, zero_or_at_least
 from patchgen.inputs.resources import folder, resolve
 from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.validation import load_profile, validate
+from patchgen.plant.cart_pendulum import MEASURED
 from patchgen.plant.drive import INDUCTANCE
 from patchgen.profiles.uncertainty import RANGE_FIELDS, BenchUncertainty, range_problem
 
@@ -84,7 +85,7 @@ class BenchSensors(InputModel):
     s: Real = bounded(1e-3, 1e3)
     theta: Real = bounded(1e-3, 1e3)
     s_dot: Real = bounded(1e-3, 1e3)
-    noise_V_rms: dict[Literal["s", "theta", "s_dot"], Annotated[Real, Field(ge=0, le=100)]] = Field(
+    noise_V_rms: dict[Literal[MEASURED], Annotated[Real, Field(ge=0, le=100)]] = Field(
         default_factory=dict)
     noise_bandwidth_Hz: Real = bounded(1e-3, 1e9, default=200.0)
     counts_per_m: dict[Literal["s"], Annotated[Real, Field(ge=1, le=1e9)]] = Field(

@@ -19,6 +19,8 @@ from typing import Protocol
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
+from patchgen.plant.cart_pendulum import RATE_OF, STATE_UNITS
+
 
 class Trajectory(Protocol):
     """Anything with a time vector and named signals (SpiceResult, patchgen's simulation result)."""
@@ -67,7 +69,7 @@ class Comparison:
 
 
 # a signal and its time derivative, both recorded by patchgen (for cubic Hermite interpolation)
-DERIVATIVE = {"s": "s_dot", "theta": "theta_dot"}
+DERIVATIVE = RATE_OF
 PLOT_POINTS = 2001  # the overlay plot's points (the comparison itself uses every ngspice point)
 
 
@@ -111,8 +113,8 @@ def compare(spice_result: Trajectory, own_result: Trajectory, names: Sequence[st
 
 
 PLOT_DPI = 120  # the overlay is a small figure: screen resolution is enough
-_UNITS = {"theta": ("deg", 180.0 / math.pi), "s": ("m", 1.0), "s_dot": ("m/s", 1.0),
-          "theta_dot": ("deg/s", 180.0 / math.pi), "u_c": ("V", 1.0)}
+_UNITS = {**{q: (u.replace("rad", "deg"), 180.0 / math.pi) if u.startswith("rad") else (u, 1.0)
+             for q, u in STATE_UNITS.items()}, "u_c": ("V", 1.0)}  # plotted: angles in degrees
 
 
 def comparison_plot(cmp: Comparison, stem: str, title: str = "", own_label: str = "patchgen",

@@ -30,12 +30,13 @@ from patchgen.inputs.scenario import Scenario
 from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
+from patchgen.plant.cart_pendulum import ANGLE, POSITION, RATE_OF
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.studies.bench_corners import BenchStudy, CornerOutcome, cart_excursion, study
 
 # Bryson excursions times these (theta, s, s_dot, u); integral of s off, then on
-WEIGHT_GRID = {"theta": (1.0, 0.5), "s": (1.0, 0.5), "s_dot": (1.0, 1 / 3), "u": (1.0,)}
+WEIGHT_GRID = {ANGLE: (1.0, 0.5), POSITION: (1.0, 0.5), RATE_OF[POSITION]: (1.0, 1 / 3), "u": (1.0,)}
 INTEGRAL_OPTIONS = (False, True)
 SEARCH_RUNS = 64  # seeds per corner while searching (one block of the simulator)
 LABEL = "corner-robust gains"

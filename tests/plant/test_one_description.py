@@ -16,23 +16,11 @@ import patchgen
 from patchgen.inputs.spec import PlantSpec
 from patchgen.plant.cart_pendulum import PARAMETER_NAMES, PARAMETERS, STATE_NAMES, UNCERTAIN
 from patchgen.plant.compiled import PLANT_VECTOR, VECTOR_PARAMETERS, plant_vector
+from patchgen.plant.drive import MOTOR_PARAMETER_NAMES
 from patchgen.plant.equations import PlantParams
 
 PKG = Path(patchgen.__file__).parent
-SENSORS = "the measured set s, theta, s_dot: the bench profile's sensor set (sensors as labs have them)"
-KNOWN: dict[str, tuple[int, str]] = {  # module -> (how many, where they belong)
-    "patch/realization.py": (3, SENSORS),
-    "identify/profile.py": (2, SENSORS),
-    "design/lqg.py": (1, SENSORS),
-    "identify/benchtest.py": (1, SENSORS),
-    "identify/identify.py": (1, SENSORS),
-    "identify/recording.py": (1, "a recording's quantities and units: from the plant's states and the sensor set"),
-    "inputs/spec.py": (1, SENSORS),
-    "profiles/bench.py": (1, SENSORS),
-    "bench/files.py": (1, "history columns' units: the plant's STATE_UNITS"),
-    "spice/compare.py": (1, "plotted units: the plant's STATE_UNITS"),
-    "studies/robust.py": (1, "the weight grid per state: from the plant's states"),
-}
+KNOWN: dict[str, tuple[int, str]] = {}  # module -> (how many, where they belong): none left
 
 
 def _lists_of_names() -> list[tuple[str, int, str]]:
@@ -48,7 +36,8 @@ def _lists_of_names() -> list[tuple[str, int, str]]:
             if items is None:
                 continue
             words = {x.value for x in items if isinstance(x, ast.Constant) and isinstance(x.value, str)}
-            for which, names in (("states", STATE_NAMES), ("parameters", PARAMETER_NAMES)):
+            for which, names in (("states", STATE_NAMES), ("parameters", PARAMETER_NAMES),
+                                 ("motor", MOTOR_PARAMETER_NAMES)):
                 if len(words & set(names)) >= 3:
                     found.append((rel, node.lineno, which))
     return found
@@ -67,12 +56,14 @@ def test_no_module_outside_plant_lists_the_plant_s_states_or_parameters():
 def test_the_walk_finds_a_list_written_out_again(tmp_path, monkeypatch):
     """The walk is not blind: a module that spells the states out is found."""
     probe = PKG / "design" / "_probe_states.py"
-    probe.write_text('ORDER = ("s", "theta", "s_dot", "theta_dot")\nP = ["M", "m", "b_VF"]\n')
+    probe.write_text('ORDER = ("s", "theta", "s_dot", "theta_dot")\nP = ["M", "m", "b_VF"]\n'
+                     'D = {"R_m", "K_t", "K_g"}\n')
     try:
         found = [f for f in _lists_of_names() if f[0] == "design/_probe_states.py"]
     finally:
         probe.unlink()
-    assert found == [("design/_probe_states.py", 1, "states"), ("design/_probe_states.py", 2, "parameters")]
+    assert found == [("design/_probe_states.py", 1, "states"), ("design/_probe_states.py", 2, "parameters"),
+                     ("design/_probe_states.py", 3, "motor")]
 
 
 def test_the_spec_s_plant_table_is_the_plant_model_s_parameters():

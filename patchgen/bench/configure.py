@@ -35,7 +35,8 @@ from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
 LIMIT_TOL = 1e-9  # relative: an actuator limit at the rails, as a motor's a V_limit / (a amp_gain) computes it
-SPREAD_ORDER = tuple(k for k in VECTOR_PARAMETERS if k != "J")  # the plant vector's first parameters (d: half track)
+# the plant vector's first parameters (d: half track), those a --spread may draw
+SPREAD_ORDER = tuple(k for k in VECTOR_PARAMETERS if k not in ("J", "F_C"))
 
 
 def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
@@ -83,6 +84,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     imp = machine.imperfections
 
     scenario = scenario.on_track(plant.d)  # an offset or step given as a fraction of the track, in metres
+    scenario = scenario.on_pendulum(plant)  # a push at a stated point of the pendulum: on the cart and at l
     levels = noise_and_drift(circuit.sensor_ids, bench, machine, scenario, ideal)
     sensor_rms, amp_rms, drift = levels.sensor_V_rms, levels.amplifier_V_rms, levels.drift_V_per_s
     s_proc = [noise_process(sensor_rms[s], levels.sensor_bandwidth_Hz, step)

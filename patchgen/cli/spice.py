@@ -71,7 +71,7 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_js
     levels = noise_and_drift([s.id for s in net.sensors], bench, machine, scenario, ideal)
     settings = SpiceSettings(duration_s=scenario.duration_s, step_s=step_s, x0=tuple(scenario.initial.vector()),
                              noise_and_drift=levels, actuator="ideal" if ideal else "bench",
-                             seed=scenario.seed, disturbances=tuple(scenario.disturbances))
+                             seed=scenario.seed, disturbances=tuple(scenario.on_pendulum(plant).disturbances))
     deck = spice_deck(net, plant, bench, machine, settings)
     files: dict[str, str | bytes] = {"patch.cir": deck.text}
     for name, data in deck.files.items():

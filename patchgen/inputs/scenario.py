@@ -17,6 +17,7 @@ from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded, magnitude
 from patchgen.inputs.resources import resolve
 from patchgen.inputs.validation import read_toml, validate
+from patchgen.plant.equations import PlantParams, push_shares
 
 MAX_DURATION_S = 1e5  # about a day: longer than any bench experiment
 LEVEL_MAX_V = 100.0  # noise levels (V rms) and drift rates (V/s): far beyond any machine's rails
@@ -68,7 +69,7 @@ class InitialState(InputModel):
 
 
 _NEEDS = {"force_impulse": ("at", "duration_s", "force_N"), "step": ()}  # what a kind must have
-_ALLOWED = {"force_impulse": _NEEDS["force_impulse"], "step": ("size_m", "size_track")}  # what it may have
+_ALLOWED = {"force_impulse": _NEEDS["force_impulse"] + ("arm_m",), "step": ("size_m", "size_track")}  # may have
 # (a step has one of its two sizes: Disturbance._one_size)
 
 
@@ -88,6 +89,9 @@ class Disturbance(InputModel):
     force_N: magnitude(MAX_FORCE_N) | None = Field(default=None, validate_default=True)
     size_track: magnitude(1.0) | None = Field(default=None, validate_default=True)
     size_m: magnitude(MAX_DISTANCE_M) | None = Field(default=None, validate_default=True)
+    arm_m: Real | None = bounded(0, MAX_DISTANCE_M, open_lo=True, default=None, validate_default=True,
+                                 description="a push on the pendulum: where, m from the pivot (none: at l, its "
+                                             "centre of mass, the tip of the thesis's point mass)")
 
     @field_validator("size_m", mode="after")
     @classmethod
@@ -100,7 +104,14 @@ class Disturbance(InputModel):
             raise ValueError("give size_m (m) or size_track (a fraction of the track), not both")
         return v
 
-    @field_validator("at", "duration_s", "force_N", "size_m", "size_track", mode="after")
+    @field_validator("arm_m", mode="after")
+    @classmethod
+    def _on_the_pendulum(cls, v, info: ValidationInfo):
+        if v is not None and info.data.get("kind") == "force_impulse" and info.data.get("at") != "pendulum_tip":
+            raise ValueError("is where a push on the pendulum acts: only with at = 'pendulum_tip'")
+        return v
+
+    @field_validator("at", "duration_s", "force_N", "size_m", "size_track", "arm_m", mode="after")
     @classmethod
     def _for_kind(cls, v, info: ValidationInfo):
         kind = info.data.get("kind")
@@ -179,6 +190,23 @@ class Scenario(InputModel):
         steps = [x.model_copy(update={"size_m": x.size_track * track_m, "size_track": None})
                  if x.size_track is not None else x for x in self.disturbances]
         return self.model_copy(update={"initial": initial, "disturbances": steps})
+
+    def on_pendulum(self, plant: PlantParams) -> Scenario:
+        """The scenario's pushes as the simulator applies them to ``plant``: a push on the pendulum
+        at ``arm_m`` becomes a push on the cart and one at l (patchgen.plant.equations.push_shares),
+        as the nominal pendulum has them; one at l stays as it is."""
+        if all(x.arm_m is None for x in self.disturbances):
+            return self
+        out = []
+        for x in self.disturbances:
+            if x.arm_m is None:
+                out.append(x)
+                continue
+            cart, at_l = push_shares(plant, x.arm_m)
+            out.append(x.model_copy(update={"force_N": x.force_N * at_l, "arm_m": None}))
+            if cart:
+                out.append(x.model_copy(update={"force_N": x.force_N * cart, "arm_m": None, "at": "cart"}))
+        return self.model_copy(update={"disturbances": out})
 
     @property
     def path(self) -> str:

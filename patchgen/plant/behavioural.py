@@ -12,6 +12,9 @@ from collections.abc import Callable
 
 from patchgen.plant.equations import PlantParams
 
+# m/s: SPICE's Coulomb friction is F_C tanh(s_dot / this), a sign smooth enough for its variable step
+COULOMB_SMOOTHING_M_S = 1e-4
+
 
 def accelerations(plant: PlantParams, number: Callable[[float], str], th: str, sd: str, thd: str, force: str,
                   tip: str, sdd: str) -> tuple[str, str]:
@@ -39,7 +42,8 @@ def accelerations(plant: PlantParams, number: Callable[[float], str], th: str, s
     if tip and plant.J:  # the push's share a rigid pendulum leaves the cart: tip (1 - r) cos^2
         tip_s += f" + ({tip})*{number(1.0 - r_)}*cos({th})*cos({th})"
     tip_th = f" + ({tip})*cos({th})/({m}*{L})" if tip else ""
-    s_ddot = (f"(-{b}*{sd} + {m}*{l}*{thd}*{thd}*sin({th}) + ({c}/{L})*{thd}*cos({th})"
+    coulomb = f" - {number(plant.F_C)}*tanh({sd}/{number(COULOMB_SMOOTHING_M_S)})" if plant.F_C else ""
+    s_ddot = (f"(-{b}*{sd}{coulomb} + {m}*{l}*{thd}*{thd}*sin({th}) + ({c}/{L})*{thd}*cos({th})"
               f" - {m_r}*{g}*sin({th})*cos({th}) + {force}{tip_s}) / (({M}+{m}) - {m_r}*cos({th})*cos({th}))")
     theta_ddot = f"-({c}/({m}*{l}*{L}))*{thd} + ({g}/{L})*sin({th}){tip_th} - cos({th})*{sdd}/{L}"
     return s_ddot, theta_ddot

@@ -69,6 +69,8 @@ PARAMETERS = (
     Parameter("d", "m", 0.05, 20, 1.090, "usable track length between the switches, m", uncertain=False),
     Parameter("J", "kg m^2", 0, 10, 0.0, "pendulum's moment of inertia about its centre of mass, kg m^2 (0: a point "
               "mass, as the thesis's; a rod of length L: m L^2 / 12)", uncertain=False),  # not yet swept or fitted
+    Parameter("F_C", "N", 0, 1e3, 0.0, "cart Coulomb friction, N (0: viscous alone, as the thesis's; a linear design "
+              "cannot see it, the bench's simulation has it)", uncertain=False),
 )
 PARAMETER_NAMES = tuple(p.name for p in PARAMETERS)
 UNCERTAIN = tuple(p.name for p in PARAMETERS if p.uncertain)  # what a sweep or a sensitivity may put off

@@ -17,10 +17,11 @@ import numpy as np
 # cached on disk; IEEE arithmetic, no Python exceptions for x / 0 (as patchgen.bench.kernel's)
 _JIT = {"cache": True, "error_model": "numpy"}
 
-PLANT_VECTOR = ("M", "m", "l", "g", "b_VF", "c", "half_track", "J")  # a plant as the compiled loops take it
+PLANT_VECTOR = ("M", "m", "l", "g", "b_VF", "c", "half_track", "J", "F_C")  # a plant as the compiled loops take it
 P_HALF_TRACK = PLANT_VECTOR.index("half_track")  # where the limit switches are (d/2)
 P_J = PLANT_VECTOR.index("J")
-VECTOR_PARAMETERS = ("M", "m", "l", "g", "b_VF", "c", "d", "J")  # the PlantParams field behind each entry
+P_F_C = PLANT_VECTOR.index("F_C")
+VECTOR_PARAMETERS = ("M", "m", "l", "g", "b_VF", "c", "d", "J", "F_C")  # the PlantParams field behind each entry
 
 
 def plant_vector(plant) -> np.ndarray:
@@ -59,7 +60,7 @@ def sincos(x):
     return (-sn if q & 2 else sn), (-cs if (q + 1) & 2 else cs)
 
 
-N_COEF = 11  # per-plant constants of eq. 2.16-2.19 (plant_coefficients)
+N_COEF = 12  # per-plant constants of eq. 2.16-2.19 (plant_coefficients)
 
 
 @nb.njit(inline="always", **_JIT)
@@ -72,6 +73,7 @@ def plant_coefficients(p, out):
     out[0], out[1], out[2], out[3], out[4] = M + m, m * r, m * l, c / L, m * g * r
     out[5], out[6], out[7], out[8], out[9] = b, -c / (m * l * L), g / L, 1.0 / (m * L), 1.0 / L
     out[10] = 1.0 - r
+    out[11] = p[P_F_C]
 
 
 @nb.njit(inline="always", **_JIT)
@@ -79,7 +81,8 @@ def plant_accel(q, i, sn, cs, sd, thd, force, tip):
     """(s_ddot, theta_ddot) of eq. 2.16-2.19 with coefficients q[:, i], plus a horizontal force at
     distance l on the pendulum: generalised forces tip on s and tip * l * cos(theta) on theta."""
     den = q[0, i] - q[1, i] * cs * cs
-    bracket = -q[5, i] * sd + q[2, i] * thd * thd * sn + q[3, i] * thd * cs - q[4, i] * sn * cs + force
+    coulomb = q[11, i] * (1.0 if sd > 0.0 else (-1.0 if sd < 0.0 else 0.0))  # against the cart's motion
+    bracket = -q[5, i] * sd + q[2, i] * thd * thd * sn + q[3, i] * thd * cs - q[4, i] * sn * cs + force - coulomb
     sdd = (bracket + (tip * sn * sn + tip * q[10, i] * cs * cs)) / den  # q[10] = 1 - r: 0 for a point mass
     return sdd, q[6, i] * thd + q[7, i] * sn + tip * cs * q[8, i] - cs * sdd * q[9, i]
 

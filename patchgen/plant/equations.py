@@ -6,7 +6,8 @@ Input: the force F_U on the cart (N).
 The pendulum is a rigid body: mass m, centre of mass at l from the pivot, moment of inertia J
 about it (the thesis's point mass is J = 0). With I = J + m l^2 about the pivot, the equations of
 motion are (M + m) s'' + m l cos(theta) theta'' - m l sin(theta) theta'^2 = F - b_VF s' and
-I theta'' + m l cos(theta) s'' - m g l sin(theta) = -c theta'. They are written with the swing
+I theta'' + m l cos(theta) s'' - m g l sin(theta) = -c theta', with Coulomb friction F_C sign(s')
+on the cart beside the viscous b_VF s' when the plant has it. They are written with the swing
 length L = I / (m l) = l + J / (m l) and r = l / L, so that J = 0 (L = l, r = 1) takes exactly the
 thesis's floating-point operations.
 """
@@ -42,6 +43,9 @@ class PlantParams:
         Track length between the limit switches (m).
     J : float
         The pendulum's moment of inertia about its centre of mass (kg m^2); 0 for a point mass.
+    F_C : float
+        The cart's Coulomb friction (N), opposing its motion; 0 for viscous friction alone. Not in
+        the linear model (it has no slope at rest): the nonlinear equations and the bench have it.
     """
 
     M: float
@@ -52,6 +56,7 @@ class PlantParams:
     c: float
     d: float
     J: float = 0.0
+    F_C: float = 0.0
 
     def swing_length(self) -> float:
         """L = I / (m l) = l + J / (m l): the length of the point mass that swings as this pendulum."""
@@ -71,6 +76,16 @@ class PlantParams:
             The perturbed plant; this one is unchanged.
         """
         return replace(self, **{k: getattr(self, k) * f for k, f in factors.items()})
+
+
+def push_shares(p: PlantParams, arm_m: float) -> tuple[float, float]:
+    """Where a horizontal push on the pendulum at ``arm_m`` from the pivot acts, as the
+    simulator applies pushes: (the share that acts as a push on the cart, the share that acts at
+    l). Its generalised forces are F on s and F arm cos(theta) on theta; a push at l has F and
+    F l cos(theta), one on the cart F and 0: so F at arm is (1 - arm/l) F on the cart and
+    (arm/l) F at l, exactly, at any angle."""
+    k = arm_m / p.l
+    return 1.0 - k, k
 
 
 def linear_matrices(p: PlantParams) -> tuple[np.ndarray, np.ndarray]:
@@ -131,6 +146,8 @@ def nonlinear_rhs(p: PlantParams, x: np.ndarray, force: float | np.ndarray) -> n
     sin, cos = np.sin(th), np.cos(th)
     den = (M + m) - m * cos * cos * r
     bracket = -b * sd + m * l * thd * thd * sin + (c / L) * thd * cos - m * g * sin * cos * r + force
+    if p.F_C:  # Coulomb friction against the cart's motion (none at rest)
+        bracket = bracket - p.F_C * np.sign(sd)
     sdd = bracket / den
     thdd = -c / (m * l * L) * thd + g / L * sin - cos * sdd / L
     return np.array([sd, thd, sdd, thdd])

@@ -81,6 +81,7 @@ SPEC_FIELDS_LAG = {
     "plant.M": Num(0.01, 100), "plant.m": Num(1e-3, 10), "plant.l": Num(0.01, 10),
     "plant.g": Num(1, 30, required=False), "plant.b_VF": Num(0, 1000), "plant.c": Num(0, 10),
     "plant.d": Num(0.05, 20, required=False), "plant.J": Num(0, 10, required=False),
+    "plant.F_C": Num(0, 1e3, required=False),
     "sensors.s": Num(1e-3, 1e3), "sensors.theta": Num(1e-3, 1e3), "sensors.s_dot": Num(1e-3, 1e3),
     "sensors.theta_dot": Num(1e-3, 1e3, required=False),
     "actuator.K_U": Num(0.01, 1000), "actuator.tau": Num(0, 10, required=False),

@@ -51,7 +51,8 @@ def scenario_cases() -> list[Case]:
         out.append(sc_case(f"drift-{name}", with_field(OFFSET, "drift", new), "drift"))
     for name, new in {"word": "loud", "number": 0.1, "bool": False, "list": [0.1]}.items():
         out.append(sc_case(f"noise-{name}", with_field(OFFSET, "noise", new), "noise"))
-    push = {"time_s": Num(0, 1e5), "duration_s": Num(0, 1e5, open_lo=True), "force_N": Num(None, 1e4, symmetric=True)}
+    push = {"time_s": Num(0, 1e5), "duration_s": Num(0, 1e5, open_lo=True), "force_N": Num(None, 1e4, symmetric=True),
+            "arm_m": Num(0, 100, open_lo=True, required=False)}
     for key, kind in push.items():
         for mname, new in number_mutations(kind).items():
             if mname == "missing":
@@ -74,6 +75,8 @@ def scenario_cases() -> list[Case]:
         "push-at": (_disturbance(PUSH, "at", "nose"), "disturbances[0].at"),
         "push-with-size": (_disturbance(PUSH, "size_m", 0.1), "disturbances[0].size_m"),
         "step-with-force": (_disturbance(STEP, "force_N", 1.0), "disturbances[0].force_N"),
+        "arm-on-the-cart": (_disturbance(_disturbance(PUSH, "at", "cart"), "arm_m", 0.3), "disturbances[0].arm_m"),
+        "step-with-arm": (_disturbance(STEP, "arm_m", 0.3), "disturbances[0].arm_m"),
         "step-missing-size": ({**STEP, "disturbances": [{"kind": "step", "time_s": 1.0}]}, "disturbances[0].size_m"),
         "disturbances-table": (with_field(OFFSET, "disturbances", {"kind": "step"}), "disturbances"),
         "unknown-top": (with_field(OFFSET, "bogus", 1), "bogus"),

@@ -28,7 +28,7 @@ from patchgen.inputs.drive_fields import LAG_MODELS, motor_of
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
 from patchgen.plant.cart_pendulum import POSITION_OF
-from patchgen.plant.compiled import VECTOR_PARAMETERS, plant_vector
+from patchgen.plant.compiled import P_HALF_TRACK, VECTOR_PARAMETERS, plant_vector
 from patchgen.plant.drive import with_rotor
 from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
@@ -131,6 +131,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         act_text = (f"{act.model}: K_U = {act.K_U} N/V, tau = {tau} s, "
                     f"dead zone +/-{dead} V, force limit +/-{flim} N")
 
+    cut = bench.track.cut_at(plant.d)  # where the switches or the watchdog cut the motor
     kinds, t0s, t1s, vals = [], [], [], []
     for d in scenario.disturbances:
         if d.kind == "step":
@@ -147,7 +148,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     cfg = EngineConfig(
         settings=Settings(
             dt=float(step), steps=int(n_steps), stride=int(stride), saturation=float(imp.saturation_V),
-            clip=not ideal, limit_switches=bool(bench.track.limit_switches),
+            clip=not ideal, limit_switches=cut is not None,
             fall_angle=math.radians(scenario.fall_angle_deg), output=int(circuit.output_index),
             x0=np.array(scenario.initial.vector(), dtype=np.float64),
             actuator=int(model)),
@@ -159,7 +160,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
                       param2=_f64(circuit.param2), ic=_f64(circuit.ic_V),
                       drift=_f64(_drifts(circuit, levels, machine))),
         disturbances=Disturbances(kind=_i64(kinds), t0=_f64(t0s), t1=_f64(t1s), value=_f64(vals)),
-        plant=plant_vector(with_rotor(plant, motor)),
+        plant=_with_cut(plant_vector(with_rotor(plant, motor)), cut),
         plant_spread=_f64([spread.get(k, 0.0) for k in SPREAD_ORDER]),
         actuator=_f64([act.K_U, tau, dead, flim, emf]),
         bench_spread=bs.plan(ranges, bench.uncertainty.distribution,
@@ -174,7 +175,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         force_bandwidth_Hz=levels.force_bandwidth_Hz,
         saturation_V=imp.saturation_V, saturation_clipped=not ideal,
         actuator=act_text, limit_switches=bool(bench.track.limit_switches),
-        half_track_m=plant.d / 2,
+        half_track_m=plant.d / 2, watchdog_m=bench.track.watchdog_m,
         plant_spread={k: v for k, v in spread.items() if v},
         bench_spread={k: list(v) for k, v in ranges.items()},
         bench_distribution=bench.uncertainty.distribution if ranges else None,
@@ -198,6 +199,14 @@ def harmless_overloads(circuit: Circuit, cfg: EngineConfig) -> tuple[str, ...]:
     dead = ranges.get("dead_zone_V", (0.0, cfg.actuator[A_DEAD_ZONE]))[1]
     within = f_lim / k_u + dead <= st.saturation * (1.0 + LIMIT_TOL)
     return (circuit.amp_ids[j],) if within else ()
+
+
+def _with_cut(vector: np.ndarray, cut: float | None) -> np.ndarray:
+    """The plant vector with the run's end at the motor's cut (the watchdog's, when nearer than the
+    switches at half the track)."""
+    if cut is not None:
+        vector[P_HALF_TRACK] = cut
+    return vector
 
 
 def _sensors(circuit: Circuit, bench: BenchProfile, ideal: bool) -> Sensors:

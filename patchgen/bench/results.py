@@ -89,6 +89,7 @@ class SimSettings:
     actuator: str
     limit_switches: bool
     half_track_m: float
+    watchdog_m: float | None  # the lab's control cuts the motor at this |s| (none: the switches alone)
     plant_spread: dict[str, float]
     bench_spread: dict[str, list[float]] = field(default_factory=dict)  # key -> [low, high] each run drew from
     bench_distribution: str | None = None  # how: uniform or normal (None: no bench spread)

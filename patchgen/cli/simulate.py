@@ -61,7 +61,8 @@ def summary_table(result: SimResult) -> Table:
 
     rows = [
         ("held (up, inside the switches)", "yes" if r0.held else "no", f"{100 * d.fraction_held:.1f} %"),
-        ("limit switch tripped", when(r0.limit_switch_tripped, r0.trip_time_s), f"{100 * d.fraction_tripped:.1f} %"),
+        ("limit switch tripped" if result.settings.watchdog_m is None else "switch or watchdog tripped",
+         when(r0.limit_switch_tripped, r0.trip_time_s), f"{100 * d.fraction_tripped:.1f} %"),
         ("  when (s)", "", _p(d, "trip_time_s")),
         (f"pendulum fallen past {result.scenario.fall_angle_deg:g} deg", when(r0.fallen, r0.fall_time_s),
          f"{100 * d.fraction_fallen:.1f} %"),

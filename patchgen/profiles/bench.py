@@ -130,6 +130,15 @@ class BenchTrack(InputModel):
     """The track: whether limit switches cut the power at its ends."""
 
     limit_switches: bool = True
+    watchdog_m: Real | None = bounded(1e-3, 10, default=None, description=(
+        "|s| beyond which the lab's control cuts the motor, m, as a Quanser IP02's scripts do at 0.3 m (none: the "
+        "switches alone)"))
+
+    def cut_at(self, track_m: float) -> float | None:
+        """|s| (m) at which the motor is cut on a track of ``track_m``: the watchdog's, or the switches' at
+        half the track, the nearer; None when neither acts."""
+        ends = ([track_m / 2] if self.limit_switches else []) + ([self.watchdog_m] if self.watchdog_m else [])
+        return min(ends) if ends else None
 
 
 class BenchProfile(InputModel):

@@ -56,11 +56,13 @@ def actuator(d: DeckLines, plant: PlantParams, bench: BenchProfile, ideal: bool)
 
 def _switched(d: DeckLines, plant: PlantParams, bench: BenchProfile, force: str) -> str:
     """The force with the limit switches cutting it at +/- d/2, when the track has them."""
-    if not bench.track.limit_switches:
+    cut = bench.track.cut_at(plant.d)
+    if cut is None:
         return force
-    half, w = num(plant.d / 2), num(SMOOTHING * plant.d / 2)
+    half, w = num(cut), num(SMOOTHING * cut)
     s = f"v({STATE_NODES['s']})"
-    d.comment(f"Limit switches at +/- d/2 = {plant.d / 2} m cut motor power")
+    d.comment(f"Limit switches at +/- d/2 = {plant.d / 2} m cut motor power" if cut == plant.d / 2 else
+              f"The watchdog cuts motor power at +/- {cut} m")
     return f"({force})*0.25*(1+tanh(({half}-{s})/{w}))*(1+tanh(({half}+{s})/{w}))"
 
 

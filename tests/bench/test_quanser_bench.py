@@ -119,3 +119,21 @@ def plant_ss_matrices(d):
     from patchgen.design.lti import plant_ss
     sys = plant_ss(d, ("s", "theta"), input="u_c")
     return sys.A, sys.B, sys.C, sys.D
+
+
+def test_the_watchdog_ends_a_run_before_the_rail_does():
+    """The IP02's scripts cut the motor at |s| > 0.3 m on a 0.814 m rail: a run ends there."""
+    d = load_design("quanser-ip02")
+    assert d.spec.plant.d == pytest.approx(0.814) and BENCH.track.cut_at(d.spec.plant.d) == pytest.approx(0.3)
+    net = build_patch(d, GP6)
+    cfg, settings = engine_config(compile_circuit(net, GP6, BENCH), plant_params(d.spec), BENCH, GP6,
+                                  load_scenario("ip02-tap"))
+    assert cfg.plant[6] == pytest.approx(0.3) and settings.watchdog_m == 0.3
+    far = load_scenario("ip02-tap").model_copy(update={"initial": load_scenario("ip02-tap").initial.model_copy(
+        update={"s": 0.31})})
+    res = simulate(net, plant_params(d.spec), BENCH, GP6, far, runs=2)
+    assert all(r.limit_switch_tripped and r.trip_time_s < 0.01 for r in res.runs)
+    no_dog = BENCH.model_copy(update={"track": BENCH.track.model_copy(update={"watchdog_m": None})})
+    assert no_dog.track.cut_at(0.814) == pytest.approx(0.407)
+    for r in simulate(net, plant_params(d.spec), no_dog, GP6, far, runs=2).runs:  # not cut where it starts
+        assert not r.limit_switch_tripped or r.trip_time_s > 0.1

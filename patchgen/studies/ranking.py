@@ -51,7 +51,8 @@ def wilson(held: int, runs: int, z: float = Z95) -> tuple[float, float]:
 class ScenarioOutcome:
     """A candidate's runs of one scenario on the bench: how many held (up, inside the switches,
     no amplifier past the rails, the whole scenario), fell, tripped, overloaded, and the largest
-    amplifier swing (V)."""
+    amplifier swing (V); and how many had their command at the actuator's limit (a fact of the run,
+    not a fault: a motor's amplifier at its limit)."""
 
     scenario: str
     runs: int
@@ -60,6 +61,7 @@ class ScenarioOutcome:
     tripped: int
     overloaded: int
     worst_swing_V: float
+    at_limit: int = 0
     results: tuple[RunSummary, ...] = field(default=(), repr=False, compare=False)
 
     @property
@@ -77,7 +79,8 @@ class ScenarioOutcome:
         lo, hi = self.interval
         return {"scenario": self.scenario, "runs": self.runs, "held": self.held, "fraction_held": self.fraction,
                 "interval_95": [lo, hi], "fallen": self.fallen, "tripped": self.tripped,
-                "overloaded": self.overloaded, "worst_swing_V": self.worst_swing_V}
+                "overloaded": self.overloaded, "worst_swing_V": self.worst_swing_V,
+                "at_actuator_limit": self.at_limit}
 
 
 def outcome(scenario: str, runs: list[RunSummary], worst_swing_V: float) -> ScenarioOutcome:
@@ -85,7 +88,8 @@ def outcome(scenario: str, runs: list[RunSummary], worst_swing_V: float) -> Scen
     return ScenarioOutcome(scenario, len(runs), sum(r.held and not r.overloads for r in runs),
                            sum(r.fall_time_s is not None for r in runs),
                            sum(r.trip_time_s is not None for r in runs),
-                           sum(bool(r.overloads) for r in runs), worst_swing_V, tuple(runs))
+                           sum(bool(r.overloads) for r in runs), worst_swing_V,
+                           sum(r.actuator_limit_time_s > 0 for r in runs), tuple(runs))
 
 
 def decision(outcomes: list[ScenarioOutcome] | tuple[ScenarioOutcome, ...], target: float = TARGET) -> str:

@@ -50,7 +50,8 @@ def _fake_bench(monkeypatch, seed: int) -> list:
         held, excursion = _table(seed, net.point, scenario.name, _corner(bench))
         ran.append((net.point, scenario.name, _corner(bench)))
         return SimpleNamespace(runs=[SimpleNamespace(held=i < held, overloads=(), fall_time_s=None,
-                                                     trip_time_s=None, max_abs_s_m=excursion, max_abs_u_c_V=1.0)
+                                                     trip_time_s=None, max_abs_s_m=excursion, max_abs_u_c_V=1.0,
+                                                     actuator_limit_time_s=0.0)
                                      for i in range(runs)])
 
     monkeypatch.setattr(bench_corners, "simulate", simulate)

@@ -38,7 +38,8 @@ DEPENDS = {  # each folder's direct foundations (render sits below the simulator
     "spice": ("bench",),
     "swingup": ("bench",),
     "studies": ("bench",),
-    "cli": ("identify", "spice", "swingup", "studies"),
+    "pipeline": ("identify", "spice", "swingup", "studies"),
+    "cli": ("pipeline",),
 }
 LAZY = patchgen._LAZY  # the root package's lazily exported names -> their modules
 

@@ -22,7 +22,7 @@ _UNITS = {"t": "s", **{q: u.replace("/", "_per_") for q, u in STATE_UNITS.items(
           "s_ref": STATE_UNITS[POSITION], "u_c": "V", "force": "N"}
 
 
-def output_files(result: SimResult, svg: bool = False) -> dict[str, bytes]:
+def output_files(result: SimResult, svg: bool = False, summary: dict | None = None) -> dict[str, bytes]:
     """The simulation's files by name, in the order they are listed.
 
     Parameters
@@ -31,6 +31,9 @@ def output_files(result: SimResult, svg: bool = False) -> dict[str, bytes]:
         The simulation; without a history, only runs.csv and summary.json.
     svg : bool
         Also history.svg (PNG only by default).
+    summary : dict, optional
+        summary.json's content when a command's report says more than the runs (its linear
+        verdicts, the corners of the bench's ranges); default: the runs' own summary.
 
     Returns
     -------
@@ -42,8 +45,8 @@ def output_files(result: SimResult, svg: bool = False) -> dict[str, bytes]:
     if result.history is not None:
         files["history.csv"] = _history_csv(result.history).encode()
     files["runs.csv"] = _runs_csv(result).encode()
-    files["summary.json"] = (json.dumps(result.summary(), indent=2, sort_keys=True, allow_nan=False)
-                             + "\n").encode()
+    files["summary.json"] = (json.dumps(result.summary() if summary is None else summary, indent=2, sort_keys=True,
+                                        allow_nan=False) + "\n").encode()
     if plot is not None:
         files.update(plot.result())
     return files

@@ -9,13 +9,9 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from patchgen.bench.diagnosis import diagnose
 from patchgen.bench.files import output_files
-from patchgen.bench.simulate import SimResult, simulate
-from patchgen.design.lqg import design_on
-from patchgen.design.model import plant_params
-from patchgen.inputs.errors import InputError
-from patchgen.patch.build import build_patch
+from patchgen.bench.results import SimResult
+from patchgen.pipeline.simulate import SimulatePlan, run_simulate
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, write_files
 from patchgen.studies import bench_corners
@@ -27,22 +23,24 @@ from .options import SCENARIO, SEED, out_option
 SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "history.svg", "netlist.json")
 
 
-def run_with_progress(net, plant, bench, machine, scenario, *, seed, runs, ideal, keep_history=True,
-                      quiet=False, spread=None, bench_spread=False) -> SimResult:
-    """patchgen.bench.simulate.simulate with a progress bar on stderr when there is more than one
-    run (and not ``quiet``); the arguments are simulate's."""
+def _progress_bar(name: str, runs: int, quiet: bool):
+    """A progress bar on stderr for a Monte Carlo of more than one run (none when ``quiet``): the
+    context and the callback the pipeline reports its runs to."""
+    import contextlib
+
     if runs <= 1 or quiet:
-        return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
-                        keep_history=keep_history, spread=spread, bench_spread=bench_spread)
+        return contextlib.nullcontext(None)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    cols = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
-            TimeElapsedColumn())
-    with Progress(*cols, console=Console(stderr=True), transient=True) as prog:
-        task = prog.add_task(f"{scenario.name}: Monte Carlo", total=runs)
-        return simulate(net, plant, bench, machine, scenario, seed=seed, runs=runs, ideal=ideal,
-                        keep_history=keep_history, spread=spread, bench_spread=bench_spread,
-                        progress=lambda done: prog.update(task, completed=done))
+    @contextlib.contextmanager
+    def bar():
+        cols = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                TimeElapsedColumn())
+        with Progress(*cols, console=Console(stderr=True), transient=True) as prog:
+            task = prog.add_task(f"{name}: Monte Carlo", total=runs)
+            yield lambda done: prog.update(task, completed=done)
+
+    return bar()
 
 
 def summary_table(result: SimResult) -> Table:
@@ -147,34 +145,24 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
     check_out_dir(out_dir, SIMULATE_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one simulates
     sp, machine, bench = load_inputs(spec, bench_name)
-    if bench_spread and not bench.uncertainty.ranges:
-        raise InputError("--bench-spread", "", f"the bench {bench.id} states no [uncertainty] ranges")
     scenario = scenario_for(scenario_path, sp, runs, ideal)
-    d = design_on(sp, machine, bench)
-    net = build_patch(d, machine)
-    result = run_with_progress(net, plant_params(d.spec), bench, machine, scenario, seed=seed, runs=runs,
-                               ideal=ideal, quiet=as_json, spread=spread, bench_spread=bench_spread)
-    corners = None
-    if bench_spread:
-        corners = bench_corners.study(net, plant_params(d.spec), bench, machine, scenario, seed=seed,
-                                      corner_runs=corner_runs or runs, drawn=result, ideal=ideal)
-    summary = result.summary()
-    files = output_files(result, svg)
-    if corners is not None:
-        summary["bench_spread"] = corners.as_dict()
-        files["summary.json"] = (json.dumps(summary, indent=2, sort_keys=True, allow_nan=False) + "\n").encode()
-    files["netlist.json"] = net.to_json().encode()
+    plan = SimulatePlan(runs=runs, seed=seed, ideal=ideal, spread=spread, bench_spread=bench_spread,
+                        corner_runs=corner_runs)
+    with _progress_bar(scenario.name, runs, as_json) as progress:
+        report = run_simulate(sp, machine, bench, scenario, plan, progress)
+    summary = report.summary()
+    files = output_files(report.result, svg, summary)
+    files["netlist.json"] = report.netlist.to_json().encode()
     written = write_files(out_dir, files, force=force)
     if as_json:
         click.echo(json.dumps(summary, indent=2, sort_keys=True, allow_nan=False))
         return
     console = Console()
-    console.print(summary_table(result))
-    if corners is not None:
-        console.print(corner_table(corners))
-    for lp in diagnose(net, plant_params(d.spec), bench):
+    console.print(summary_table(report.result))
+    if report.corners is not None:
+        console.print(corner_table(report.corners))
+    for lp in report.loops:
         console.print(("[green]" if lp.stable else "[red]") + lp.line() + ("[/green]" if lp.stable else "[/red]"))
-    if bench.actuator.dead_zone_V and not ideal:
-        console.print(f"the bench's dead zone (+/-{bench.actuator.dead_zone_V:g} V) and force limit "
-                      f"({bench.actuator.force_limit_N:g} N) are in the simulation, not in these poles")
+    for note in report.notes():
+        console.print(note)
     console.print("wrote " + ", ".join(str(Path(p)) for p in written))

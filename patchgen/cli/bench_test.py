@@ -20,8 +20,9 @@ def bench_test_cmd(spec, out_dir, bench_name, seed, force) -> None:
     profile says), for practice and to check identify against known values.
 
     Writes masses.toml, calibration.csv, actuator-step.csv, actuator-ramp.csv, coast-down-1.csv,
-    coast-down-2.csv, incline.toml, free-swing.csv, quiet.csv and integrator-drift.csv into DIR;
-    `patchgen identify DIR -o OUT` takes the folder whole.
+    coast-down-2.csv, incline.toml (not for a cart a DC motor drives), free-swing.csv, quiet.csv and
+    integrator-drift.csv into DIR; encoders in counts, a motor with its back-EMF and rotor, as the
+    bench profile states them. `patchgen identify DIR -o OUT` takes the folder whole.
     """
     from patchgen.design.model import plant_params
     from patchgen.identify.benchtest import FILES, bench_test_files

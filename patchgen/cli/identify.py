@@ -12,9 +12,11 @@ from .options import out_option
 @cli.command("identify")
 @click.argument("recordings", nargs=-1, required=True, metavar="RECORDINGS...")
 @out_option("bench.toml, plant.toml, report.md, report.json and the fit plots")
-@click.option("--base", default="uw-1991", show_default=True,
-              help="Bench profile for what the recordings do not give (force limit, track, random forces, "
-                   "and any sensor constant or noise level not recorded).")
+@click.option("--base", default=None,
+              help="Bench profile for what the recordings do not give (force limit, track, random forces, a "
+                   "motor's figures, encoders' counts, and any sensor constant or noise level not recorded), "
+                   "and with which a recording in counts is read (default: the bench the recordings name, "
+                   "'# bench = <id>', else uw-1991).")
 @click.option("--id", "bench_id", default="identified", show_default=True, help="The new bench profile's id.")
 @click.option("--name", default=None, help="The new bench profile's name (default: from the recordings).")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
@@ -37,11 +39,11 @@ def identify_cmd(recordings, out_dir, base, bench_id, name, as_json, force) -> N
     if not bench_id.strip():
         raise InputError("--id", "", "empty: name the profile")
     check_out_dir(out_dir, FIXED, force)
-    profile = load_bench(base, "--base", "")
+    profile = None if base is None else load_bench(base, "--base", "")
     files = expand(list(recordings))
     result = identify(files, profile)
     title = name or f"identified from {len(files)} recordings"
-    outputs = identify_files(result, files, profile, bench_id, title)
+    outputs = identify_files(result, files, result.profile, bench_id, title)
     written = write_files(out_dir, outputs, force=force)
     if as_json:
         click.echo(outputs["report.json"].decode(), nl=False)

@@ -28,6 +28,7 @@ LIMITS = {
     "m": (20.0, "twenty metres: the longest track a plant takes"),
     "rad": (2 * math.pi, "a full turn: every protractor mark lies within it"),
     "s": (1e6, "a million seconds: eleven days"),
+    "counts": (2.0 ** 31, "a 32-bit counter's range"),
 }
 RESOLUTION = 1e-9  # of the unit: a channel that never reaches a nanovolt (nanonewton, ...) holds no signal
 MIN_SAMPLE_INTERVAL_S = 1e-6  # 1 MHz: faster than any bench recorder
@@ -65,6 +66,14 @@ def signal_problem(unit: str, x: np.ndarray) -> str | None:
     if 0 < big < RESOLUTION:
         return (f"every sample is below {RESOLUTION:g} {unit} (largest {big:.3g}): no sensor resolves that; "
                 "is the column in another unit?")
+    return None
+
+
+def whole_counts(x: np.ndarray) -> str | None:
+    """An encoder's column whose samples are not all whole counts (None: they are)."""
+    off = np.flatnonzero(x != np.round(x))
+    if off.size:
+        return f"sample {off[0] + 1} is {x[off[0]]:.6g}, not a whole count: an encoder counts in integers"
     return None
 
 

@@ -115,6 +115,24 @@ class Check:
 
 
 @dataclass(frozen=True)
+class Parameter:
+    """One value written to the profile or the plant table: its estimate when identified, else
+    where it was taken from."""
+
+    value: float | str
+    unit: str
+    estimate: Estimate | None = None
+    origin: str = ""
+
+    def to_dict(self) -> dict:
+        """JSON-ready: value, unit, interval and method when identified, origin."""
+        out = {"value": self.value, "unit": self.unit, "origin": self.origin}
+        if self.estimate is not None:
+            out.update(interval_95=[self.estimate.low, self.estimate.high], method=self.estimate.method)
+        return out
+
+
+@dataclass(frozen=True)
 class Panel:
     """One panel of a fit plot: the measured trace, the fitted one (or none) against x."""
 

@@ -50,6 +50,9 @@ class Masses(InputModel):
     m_uncertainty_kg: Real = bounded(0, 1, default=0.0, description="standard uncertainty of m")
     g_m_per_s2: Real = bounded(1, 30, default=G_TABLE_B1)
     d_m: Real | None = bounded(0.05, 20, default=None, description="usable track between the switches")
+    l_cm_m: Real | None = bounded(0.01, 10, default=None,
+                                  description="pivot to the pendulum's centre of mass (balanced on an edge): "
+                                              "a rigid pendulum's l, its J from the swing")
 
 
 class Incline(InputModel):

@@ -60,7 +60,7 @@ def coast_closed_form(p: np.ndarray, t: np.ndarray, sign: float) -> tuple[np.nda
     return z, w
 
 
-def fit_coast(rec: Recording, force_bandwidth_Hz: float) -> TestFit:
+def fit_coast(rec: Recording, force_bandwidth_Hz: float, column: str = "s_V") -> TestFit:
     """Fit a coast-down: a = b_VF / (M + m) (1/s), Coulomb friction f (V/s, when shown), rho = K_s / K_s_dot.
 
     Parameters
@@ -70,6 +70,9 @@ def fit_coast(rec: Recording, force_bandwidth_Hz: float) -> TestFit:
     force_bandwidth_Hz : float
         The random force's bandwidth (the bench profile's; the filter carries the force as a
         first-order process of that band, patchgen.identify.filters).
+    column : str
+        The position's column: the pot's ``s_V``, or an encoder's ``s_counts`` (rho is then in
+        counts per volt of the tachometer).
 
     Returns
     -------
@@ -77,7 +80,7 @@ def fit_coast(rec: Recording, force_bandwidth_Hz: float) -> TestFit:
         Estimates ``decay`` (a, 1/s), ``coulomb`` (f in tachometer volts per second, present only
         when the data show it), ``rho`` (1/s) and ``tach_offset`` (V).
     """
-    t_all, z_all, w_all = rec.columns["t_s"], rec.columns["s_V"], rec.columns["s_dot_V"]
+    t_all, z_all, w_all = rec.columns["t_s"], rec.columns[column], rec.columns["s_dot_V"]
     dt = rec.dt
     ws = _smooth(w_all, round(SMOOTH_S / dt))
     noise = _mad_noise(w_all)
@@ -97,7 +100,7 @@ def fit_coast(rec: Recording, force_bandwidth_Hz: float) -> TestFit:
     dt, (t, z, w) = filters.blocks(dt, t_all[k0:k1] - t_all[k0], z_all[k0:k1], w_all[k0:k1])
     sign = float(np.sign(ws[k0]))
     if np.ptp(z) < START_SNR * _mad_noise(z):
-        raise rec.error("s_V", "the position pot does not move above its noise while the cart coasts")
+        raise rec.error(column, "the position does not move above its noise while the cart coasts")
     # a start: the noise-free coast by least squares, both channels weighted by their noise
     nz, nw = _mad_noise(z), _mad_noise(w)
     rho0 = float(np.polyfit(np.cumsum(w) * dt, z, 1)[0])

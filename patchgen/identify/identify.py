@@ -15,6 +15,11 @@ Where each parameter comes from, first choice first:
 | b_VF | coast_down (with masses), else incline |
 | l, c | free_swing (c with masses) |
 | drift rate | integrator_drift (reported; the machine profile holds drift) |
+
+A column in encoder counts is read with the base profile's counts (patchgen.identify.encoders); the
+base is the one given, else the one the recordings name (``# bench = <id>``), else DEFAULT_BASE. On
+a bench whose cart a DC motor drives, the actuator and the cart's damping are the motor's
+(patchgen.identify.motor).
 """
 
 from __future__ import annotations
@@ -24,37 +29,21 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from patchgen.identify import actuator, friction, pendulum, sensors
-from patchgen.identify.estimate import Check, Estimate, TestFit, combine, normal, welch
+from patchgen.identify import actuator, encoders, friction, motor, pendulum, sensors
+from patchgen.identify.estimate import Check, Estimate, Parameter, TestFit, combine, normal, welch
 from patchgen.identify.figures import G_TABLE_B1, Incline, Masses, read_figures
 from patchgen.identify.kalman import FitError
 from patchgen.identify.plausible import check_fit
 from patchgen.identify.recording import Recording, expand, read_recording
+from patchgen.inputs.drive_fields import motor_of
 from patchgen.inputs.errors import InputError
 from patchgen.plant.cart_pendulum import MEASURED
-from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.bench import BenchProfile, load_bench
 
 FITTED_COLUMN = {"actuator_step": "force_N", "actuator_ramp": "force_N", "coast_down": "s_dot_V",
                  "free_swing": "theta_V", "integrator_drift": "out_V"}  # the channel each fit explains
 MIN_LAG_S = 1e-3  # a bench lag shorter than this is written as a pure gain (the profile's own floor)
-
-
-@dataclass(frozen=True)
-class Parameter:
-    """One value written to the profile or the plant table: its estimate when identified, else
-    where it was taken from."""
-
-    value: float | str
-    unit: str
-    estimate: Estimate | None = None
-    origin: str = ""
-
-    def to_dict(self) -> dict:
-        """JSON-ready: value, unit, interval and method when identified, origin."""
-        out = {"value": self.value, "unit": self.unit, "origin": self.origin}
-        if self.estimate is not None:
-            out.update(interval_95=[self.estimate.low, self.estimate.high], method=self.estimate.method)
-        return out
+DEFAULT_BASE = "uw-1991"  # the base profile when none is given and no recording names its bench
 
 
 @dataclass
@@ -69,6 +58,7 @@ class Identification:
     checks: list[Check] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     base: str = ""
+    profile: BenchProfile | None = None  # the base profile itself
 
 
 def read_all(paths: list[str]) -> list[Recording | tuple[str, Masses | Incline]]:
@@ -108,16 +98,40 @@ def _pick(fits: list[TestFit], tests: tuple[str, ...], name: str) -> list[Estima
     return []
 
 
-def identify(paths: list[str], base: BenchProfile) -> Identification:
+def base_profile(recs: list[Recording], base: BenchProfile | None) -> tuple[BenchProfile, list[str]]:
+    """The base profile: the one given, else the one the recordings name (``# bench = <id or path>``),
+    else DEFAULT_BASE; and a warning when the recordings name another than the one given.
+
+    Raises
+    ------
+    InputError
+        Recordings that name two benches, or a bench that cannot be read (naming the file and ``bench``).
+    """
+    named = [(r.source, r.notes["bench"]) for r in recs if r.notes.get("bench")]
+    other = next(((s, n) for s, n in named if n != named[0][1]), None)
+    if other is not None and base is None:
+        raise InputError(other[0], "bench", f"names bench {other[1]!r}, {named[0][0]} names {named[0][1]!r}: "
+                                            "recordings of one bench, or give it with --base")
+    if base is not None:
+        wrong = [n for _, n in named if n != base.id]
+        return base, [f"the recordings name bench {wrong[0]!r}; identify took the profile given, {base.id!r}"] \
+            if wrong else []
+    if named:
+        return load_bench(named[0][1], named[0][0], "bench"), []
+    return load_bench(DEFAULT_BASE), []
+
+
+def identify(paths: list[str], base: BenchProfile | None = None) -> Identification:
     """Read and fit every recording, and gather the bench's and plant's parameters.
 
     Parameters
     ----------
     paths : list of str
         Recording files (CSV), test-figure files (TOML) and folders of them.
-    base : BenchProfile
-        Where what the recordings do not give comes from (force limit, track, random forces,
-        and any sensor constant or noise level not recorded).
+    base : BenchProfile, optional
+        Where what the recordings do not give comes from (force limit, track, random forces, a
+        motor's figures, encoders' counts, and any sensor constant or noise level not recorded);
+        None: the bench the recordings name, else DEFAULT_BASE (base_profile).
 
     Returns
     -------
@@ -130,12 +144,17 @@ def identify(paths: list[str], base: BenchProfile) -> Identification:
         raise InputError(masses[1][0], "test", f"masses given twice (also in {masses[0][0]})")
     mass_src, mass = masses[0] if masses else ("", None)
     recs = [it for it in items if isinstance(it, Recording)]
+    base, notes = base_profile(recs, base)
     fits: list[TestFit] = []
     for r in recs:
         if r.test == "calibration":
+            for q in ("s", "theta"):
+                if f"{q}_counts" in r.columns:
+                    encoders.constant_of(r, q, base, 0.0)  # a count on a bench without that encoder: refused
             fits.append(sensors.fit_calibration(r))
             check_fit(fits[-1], base.sensors.s, None)
-    result = Identification(fits, {}, {}, {}, base=base.id)
+    result = Identification(fits, {}, {}, {}, warnings=notes, base=base.id, profile=base)
+    encoders.check_counts(result, base)
     k_s = _constant(result, "K_s", "sensors.s", base.sensors.s, "V/m")
     k_theta = _constant(result, "K_theta", "sensors.theta", base.sensors.theta, "V/rad")
     g = mass.g_m_per_s2 if mass else G_TABLE_B1
@@ -150,9 +169,14 @@ def identify(paths: list[str], base: BenchProfile) -> Identification:
     for src, fig in (it for it in items if isinstance(it, tuple)):
         if isinstance(fig, Incline):
             fits.append(friction.fit_incline(fig, src))
+            if motor_of(base.actuator) is not None:
+                result.warnings.append(f"{src}: B.2 has no rotor and no back-EMF, which a motor-driven cart has: "
+                                       "its b_VF is used only without a coast-down")
     _actuator(result, base)
+    if motor_of(base.actuator) is not None:
+        motor.actuator(result, base)
     _sensors(result, base, k_s)
-    _plant(result, mass, mass_src)
+    _plant(result, mass, mass_src, motor_of(base.actuator))
     drift = [abs_estimate(e) for e in _pick(fits, ("integrator_drift",), "drift")]
     if drift:
         result.extra["drift_V_per_s"] = _combined(result, drift, "drift rate")
@@ -163,14 +187,20 @@ def _fit(r: Recording, base: BenchProfile, k_theta: float, g: float, mass: Masse
     """One recording's fit (calibrations are fitted first, by the caller)."""
     band = base.disturbance.bandwidth_Hz
     if r.test == "actuator_step":
-        return actuator.fit_step(r)
+        lagless = motor_of(base.actuator) is not None and base.actuator.motor_lag() == 0
+        return motor.fit_step_gain(r) if lagless else actuator.fit_step(r)
     if r.test == "actuator_ramp":
         return actuator.fit_ramp(r)
     if r.test == "coast_down":
-        return friction.fit_coast(r, band)
+        column, per_m = encoders.constant_of(r, "s", base, 0.0)
+        filt = base.sensors.filters().get("s_dot")
+        if column.endswith("_counts") and filt is not None:
+            return encoders.fit_coast_filtered(r, per_m, filt, band)
+        return friction.fit_coast(r, band, column)
     if r.test == "free_swing":
-        return pendulum.fit_swing(r, k_theta, g, band, mass.m_kg if mass else None,
-                                  mass.m_uncertainty_kg if mass else 0.0)
+        column, gain = encoders.constant_of(r, "theta", base, k_theta)
+        return pendulum.fit_swing(r, gain, g, band, mass.m_kg if mass else None,
+                                  mass.m_uncertainty_kg if mass else 0.0, column)
     if r.test == "quiet":
         return sensors.fit_quiet(r)
     if r.test == "integrator_drift":
@@ -218,12 +248,13 @@ def _actuator(result: Identification, base: BenchProfile) -> None:
         K = _combined(result, gains, "K_U")
         taus = _pick(fits, ("actuator_step", "actuator_ramp"), "tau") if len(models) <= 1 else [
             f.estimates["tau"] for f in step if "model: lag" in f.notes]  # tau from the same fits as K_U
-        tau = _combined(result, taus, "tau")
+        tau = _combined(result, taus, "tau") if model != "gain" else None  # a gain's step fits no lag
         if model == "lag" and tau.value < MIN_LAG_S:
             model = "gain"
         result.bench["actuator.model"] = Parameter(model, "", None, K.source)
         result.bench["actuator.K_U"] = Parameter(K.value, K.unit, K, K.source)
-        result.bench["actuator.tau"] = Parameter(0.0 if model == "gain" else tau.value, "s", tau, tau.source)
+        result.bench["actuator.tau"] = (Parameter(0.0, "s", None, K.source) if tau is None else
+                                        Parameter(0.0 if model == "gain" else tau.value, "s", tau, tau.source))
     else:
         origin = f"base profile {result.base}"
         result.bench["actuator.model"] = Parameter(base.actuator.model, "", None, origin)
@@ -244,7 +275,11 @@ def _actuator(result: Identification, base: BenchProfile) -> None:
 
 def _sensors(result: Identification, base: BenchProfile, k_s: float) -> None:
     rho = _pick(result.fits, ("coast_down",), "rho")
-    if rho:
+    direct = _pick(result.fits, ("coast_down",), "K_s_dot")  # a filtered velocity's, against its position
+    if direct:
+        est = _combined(result, direct, "K_s_dot")
+        result.bench["sensors.s_dot"] = Parameter(est.value, est.unit, est, est.source)
+    elif rho:
         r = _combined(result, rho, "rho = K_s / K_s_dot")
         ks = result.bench["sensors.s"].estimate
         ks_se = ks.se if ks else 0.0
@@ -280,7 +315,7 @@ def _sensors(result: Identification, base: BenchProfile, k_s: float) -> None:
                                                                f"base profile {result.base}")
 
 
-def _plant(result: Identification, mass: Masses | None, mass_src: str) -> None:
+def _plant(result: Identification, mass: Masses | None, mass_src: str, drive=None) -> None:
     fits, plant = result.fits, result.plant
     if mass is not None:
         plant["M"] = Parameter(mass.M_kg, "kg", None, mass_src)
@@ -293,14 +328,17 @@ def _plant(result: Identification, mass: Masses | None, mass_src: str) -> None:
     decay = _pick(fits, ("coast_down",), "decay")
     if decay and mass is not None:
         a = _combined(result, decay, "b_VF / (M + m)")
-        total, total_se = mass.M_kg + mass.m_kg, math.hypot(mass.M_uncertainty_kg, mass.m_uncertainty_kg)
+        total = mass.M_kg + mass.m_kg + motor.moving_mass(drive)  # with a motor, the rotor moves with the cart
+        total_se = math.hypot(mass.M_uncertainty_kg, mass.m_uncertainty_kg)
         est = normal(a.value * total, math.hypot(a.se * total, a.value * total_se), "kg/s", a.method, a.source,
                      welch([(a.se * total, a.dof), (a.value * total_se, math.inf)]))
         plant["b_VF"] = Parameter(est.value, "kg/s", est, est.source)
+        if drive is not None:
+            motor.damping(result, drive, est)
         for f in fits:
             if f.test == "coast_down" and "coulomb" in f.estimates and "sensors.s_dot" in result.bench:
                 c = f.estimates["coulomb"]
-                k = float(result.bench["sensors.s_dot"].value)
+                k = 1.0 if c.unit == "m/s^2" else float(result.bench["sensors.s_dot"].value)
                 result.extra[f"coulomb_N ({f.source})"] = normal(c.value * total / k, c.se * total / k, "N",
                                                                  c.method, f.source, c.dof)
     elif decay:
@@ -315,6 +353,8 @@ def _plant(result: Identification, mass: Masses | None, mass_src: str) -> None:
     if damping:
         est = _combined(result, damping, "c")
         plant["c"] = Parameter(est.value, "kg m^2/s", est, est.source)
+    if lengths and mass is not None and mass.l_cm_m is not None:
+        pendulum.rigid(result, mass.m_kg, mass.l_cm_m, mass_src)
     elif lengths:
         result.warnings.append("the free swing gives c / (m l^2): a masses file (test = \"masses\") turns it into c")
     if mass is not None and mass.d_m is not None:

@@ -40,13 +40,21 @@ def coloured(rng: np.random.Generator, rms: float, bandwidth_Hz: float, dt: floa
 
 def actuator_force(u: np.ndarray, act: BenchActuator, dt: float) -> np.ndarray:
     """The force (N) of a bench actuator for the command u (V) held over each step, read at the end
-    of each step before the command changes, from rest at u[0]."""
+    of each step before the command changes, from rest at u[0]. A DC motor's (patchgen.plant.drive)
+    with the cart held: no back-EMF, the command limited at the amplifier, then its electrical lag."""
     dz = act.dead_zone_V
     v = np.where(u > dz, u - dz, np.where(u < -dz, u + dz, 0.0))
     F = np.empty(u.size)
-    model = 0 if act.model == "gain" or act.tau <= 0 else (1 if act.model == "lag" else 2)
-    decay = math.exp(-dt / act.tau) if act.tau > 0 else 0.0
-    _actuator_steps(v, float(act.K_U), float(act.tau), decay, model, F)
+    tau = act.tau
+    if act.model == "dc_motor":  # the amplifier's limit on the voltage, then the current's lag (cart held)
+        top = act.force_limit_N / act.K_U
+        v = np.clip(v, -top, top)
+        tau = act.motor_lag()
+        model = 1 if tau > 0 else 0
+    else:
+        model = 0 if act.model == "gain" or tau <= 0 else (1 if act.model == "lag" else 2)
+    decay = math.exp(-dt / tau) if tau > 0 else 0.0
+    _actuator_steps(v, float(act.K_U), float(tau), decay, model, F)
     return np.clip(F, -act.force_limit_N, act.force_limit_N)
 
 

@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from patchgen.identify import filters, kalman, lsq
-from patchgen.identify.estimate import ML_KALMAN, Z_REJECT, Check, Panel, TestFit, delta, normal
+from patchgen.identify.estimate import ML_KALMAN, Z_REJECT, Check, Panel, Parameter, TestFit, delta, normal
 from patchgen.identify.recording import Recording
 
 MIN_PERIODS = 5  # swings a recording must hold for its period and decay
@@ -33,7 +33,7 @@ def _crossings(y: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def fit_swing(rec: Recording, gain: float, g: float, force_bandwidth_Hz: float, m: float | None = None,
-              m_se: float = 0.0) -> TestFit:
+              m_se: float = 0.0, column: str = "theta_V") -> TestFit:
     """Fit a free swing: l (m) from the period and, with the pendulum's mass, c (kg m^2/s).
 
     Parameters
@@ -49,6 +49,9 @@ def fit_swing(rec: Recording, gain: float, g: float, force_bandwidth_Hz: float, 
         as a first-order process of that band, patchgen.identify.filters).
     m, m_se : float, optional
         The pendulum's mass (kg) and its standard uncertainty; without it c is not estimated.
+    column : str
+        The angle's column: the pot's ``theta_V`` (gain in V/rad), or an encoder's ``theta_counts``
+        (gain in counts per rad).
 
     Returns
     -------
@@ -56,14 +59,15 @@ def fit_swing(rec: Recording, gain: float, g: float, force_bandwidth_Hz: float, 
         Estimates ``l``, ``beta`` (c / (m l^2), 1/s), ``c`` (with m) and, when the data show it,
         ``coulomb`` (rad/s^2).
     """
-    t_all, y_all = rec.columns["t_s"], rec.columns["theta_V"]
+    t_all, y_all = rec.columns["t_s"], rec.columns[column]
     dt = rec.dt
+    unit = column.rpartition("_")[2]
     d = np.diff(y_all)
     noise = float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(2)) or 1e-9
     off0 = float(np.median(y_all))
     moving = np.flatnonzero(np.abs(y_all - y_all[0]) > START_SNR * noise)
     if moving.size == 0 or np.ptp(y_all) < 2 * START_SNR * noise:
-        raise rec.error("theta_V", f"the pendulum does not swing above the pot's noise ({np.ptp(y_all):.3g} V peak "
+        raise rec.error(column, f"the pendulum does not swing above the sensor's noise ({np.ptp(y_all):.3g} V peak "
                                    f"to peak against {noise:.3g} V): start it from a larger angle")
     k0 = int(moving[0])
     ups = _crossings(y_all[k0:] - off0, t_all[k0:])
@@ -150,6 +154,28 @@ def fit_swing(rec: Recording, gain: float, g: float, force_bandwidth_Hz: float, 
     return TestFit(rec.source, rec.test, est, checks, title="free swing, hanging",
                    notes=[f"period {period:.5g} s over {ups.size - 1} swings, fitted from {t_all[k0]:.3g} s; "
                           f"random torque q = {math.exp(fit.p[5]):.3g} rad^2/s^3"],
-                   panels=[Panel(t_plot, y, pred.copy(), "theta (V)"),
-                           Panel(tm + t_all[k0], amp, env, "amplitude (V)", points=True),
-                           Panel(t_plot, y - pred, None, "innovation (V)")])
+                   panels=[Panel(t_plot, y, pred.copy(), f"theta ({unit})"),
+                           Panel(tm + t_all[k0], amp, env, f"amplitude ({unit})", points=True),
+                           Panel(t_plot, y - pred, None, f"innovation ({unit})")])
+
+
+def rigid(result, m: float, l_cm: float, source: str) -> None:
+    """A rigid pendulum's plant entries from its swing and its centre of mass: the swing gives the
+    length L = I / (m l) of the point mass that swings as it does and, as a point mass, c = beta m L^2;
+    with the pivot-to-centre distance l measured (``l_cm_m``), I = m l L, so J = m l (L - l) and
+    c = beta I = beta m l L (``result.plant``'s l, J and c replaced; L kept in ``result.extra``)."""
+    plant = result.plant
+    L = plant["l"].estimate
+    result.extra["swing length L"] = L
+    plant["l"] = Parameter(l_cm, "m", None, f"{source} (l_cm_m: pivot to the centre of mass)")
+    J = m * l_cm * (L.value - l_cm)
+    if J < 0:
+        result.warnings.append(f"the swing's length {L.value:.4g} m is shorter than the centre of mass's {l_cm:.4g} m: "
+                               "no rigid body swings so; the plant takes J = 0")
+    est = normal(J, m * l_cm * L.se, "kg m^2", f"m l (L - l), L from the swing; {L.method}", L.source, L.dof)
+    plant["J"] = Parameter(max(J, 0.0), "kg m^2", est, f"{L.source}: m l (L - l), L = {L.value:.5g} m")
+    if "c" in plant:
+        c = plant["c"].estimate
+        k = l_cm / L.value
+        est = normal(c.value * k, c.se * k, c.unit, f"beta m l L; {c.method}", c.source, c.dof)
+        plant["c"] = Parameter(est.value, c.unit, est, est.source)

@@ -64,13 +64,24 @@ def profile_data(result: Identification, base: BenchProfile, bench_id: str, name
     act = {k.removeprefix("actuator."): p.value for k, p in b.items() if k.startswith("actuator.")}
     noise = {k.rsplit(".", 1)[1]: p.value for k, p in b.items() if k.startswith("sensors.noise_V_rms.")}
     sens = {**{q: b[f"sensors.{q}"].value for q in MEASURED},
-            "noise_V_rms": noise, "noise_bandwidth_Hz": b["sensors.noise_bandwidth_Hz"].value}
+            "noise_V_rms": noise, "noise_bandwidth_Hz": b["sensors.noise_bandwidth_Hz"].value,
+            **_read_as(base)}
     data = {"id": bench_id, "name": name, "actuator": act, "sensors": sens,
             "track": base.track.model_dump(), "disturbance": base.disturbance.model_dump()}
     data = json.loads(json.dumps(data), parse_float=lambda s: float(f"{float(s):.{SIGNIFICANT}g}"))
     data["uncertainty"] = _ranges(result, data)
     check_bench(validate(BenchProfile, data, "the identified bench"), "the identified bench")
     return data
+
+
+def _read_as(base: BenchProfile) -> dict:
+    """How the base bench reads its sensors (encoders' counts, a filtered velocity): its hardware,
+    not identified, kept as the base profile states it."""
+    s = base.sensors
+    out = {k: dict(getattr(s, k)) for k in ("counts_per_m", "counts_per_rev") if getattr(s, k)}
+    if s.velocity_filter:
+        out["velocity_filter"] = {q: f.model_dump() for q, f in s.velocity_filter.items()}
+    return out
 
 
 def _ranges(result: Identification, data: dict) -> dict:
@@ -123,14 +134,19 @@ def bench_toml(result: Identification, base: BenchProfile, bench_id: str, name: 
     """
     data = profile_data(result, base, bench_id, name)
     b = result.bench
+    motor = data["actuator"]["model"] == "dc_motor"
+    kept = ("the motor's figures and the amplifier's limit (the force limit follows from them)" if motor
+            else "the force limit") + (", the encoders and the velocity filter" if _read_as(base) else "")
     out = ["# A bench profile identified by patchgen identify from " + ", ".join(sources) + ".",
            "# Intervals are 95 %; docs/identify.md says how each value was fitted.",
-           f"# Not identified (from the base profile {base.id}): the force limit, the track, the random forces.",
+           f"# Not identified (from the base profile {base.id}): {kept}, the track, the random forces.",
+           *(["# The measured force per command volt K_U is written as amp_gain = K_U / a (K_U follows from the",
+              "# motor for a dc_motor); the plant's b_VF is the coast-down's total damping less the back-EMF's."]
+             if motor else []),
            "", f"id = {json.dumps(bench_id)}", f"name = {json.dumps(name)}",
            "recordings = [", *(f"    {json.dumps(s)}," for s in sources), "]", "", "[actuator]"]
-    for key in ("model", "K_U", "tau", "dead_zone_V", "force_limit_N"):
+    for key, v in data["actuator"].items():
         p = b[f"actuator.{key}"]
-        v = data["actuator"][key]
         out.append(_line(f"{key} = {json.dumps(v) if isinstance(v, str) else _num(v)}", _comment(p)))
     out += ["", "[sensors]"]
     for key in MEASURED:
@@ -141,6 +157,13 @@ def bench_toml(result: Identification, base: BenchProfile, bench_id: str, name: 
         out.append(f"#   {k}: {_comment(b[f'sensors.noise_V_rms.{k}'])}")
     out.append(_line(f"noise_bandwidth_Hz = {_num(data['sensors']['noise_bandwidth_Hz'])}",
                      _comment(b["sensors.noise_bandwidth_Hz"])))
+    for key in ("counts_per_m", "counts_per_rev"):
+        if key in data["sensors"]:
+            out.append(f"{key} = {{ " + ", ".join(f"{k} = {_num(v)}" for k, v in data["sensors"][key].items())
+                       + f" }}   # base profile {base.id}")
+    for q, f in data["sensors"].get("velocity_filter", {}).items():
+        out.append(f"velocity_filter = {{ {q} = {{ wn_rad_s = {_num(f['wn_rad_s'])}, zeta = {_num(f['zeta'])} }} }}"
+                   f"   # base profile {base.id}")
     out += ["", "[track]", f"limit_switches = {'true' if data['track']['limit_switches'] else 'false'}",
             "", "[disturbance]   # assumed levels, as the base profile's"]
     for k, v in data["disturbance"].items():

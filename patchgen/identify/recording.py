@@ -9,12 +9,15 @@ header names every column with its unit, read and checked into arrays.
     0.000, 0.0, 0.013
     ...
 
-A column is ``<quantity>_<unit>``: t (s), u_c (V), force (N), s (V read on the pot, or m set
-by hand), theta (V, or rad set by hand), s_dot (V, the tachometer), out (V, an amplifier's
-output). Every test takes the columns in ``TESTS``; a column of a known quantity that a test does
-not take is left aside, an unknown quantity or a known one in another unit is an error. The time
-column rises by one sample interval (within ``CLOCK_TOLERANCE``) from line to line. docs/identify.md
-says what to record for each test.
+A column is ``<quantity>_<unit>``: t (s), u_c (V), force (N), s (V read on the pot, counts read
+on an encoder, or m set by hand), theta (V, counts, or rad set by hand), s_dot (V, the tachometer
+or a filtered velocity), out (V, an amplifier's output). An encoder's column (``s_counts``,
+``theta_counts``) stands where a test takes the pot's (``s_V``, ``theta_V``) in the tests that
+read positions (ENCODER_TESTS); the bench profile's counts turn it into SI units. Every test
+takes the columns in ``TESTS``; a column of a known quantity that a test does not take is left
+aside, an unknown quantity or a known one in another unit is an error. The time column rises by
+one sample interval (within ``CLOCK_TOLERANCE``) from line to line. docs/identify.md says what to
+record for each test.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from patchgen.identify.cells import (
     read_plain,
     signal_problem,
     unit_problem,
+    whole_counts,
 )
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.inputfile import decode_text, read_bytes
@@ -40,13 +44,16 @@ from patchgen.plant.cart_pendulum import MEASURED, RATE_OF, STATE_UNITS, STATES
 
 MAX_RECORDING_BYTES = 64 << 20  # 64 MiB: ten minutes of four channels at 2 kHz is some 40 MB of text
 CLOCK_TOLERANCE = 0.01  # a sample interval may differ from the median by 1 %: a recorder's clock, not a gap
+COUNTS = "counts"  # an encoder's unit: whole counts, turned into SI units by the bench profile's
+ENCODER_TESTS = ("calibration", "coast_down", "free_swing")  # the tests where a count stands for a pot's volts
 
 def _measured(q: str) -> tuple[tuple[str, ...], str]:
     """The units a measured quantity may be recorded in, and what it is: a position on its sensor
     (V) or set by hand (SI); a rate on its sensor alone."""
     what, unit = next(st.what for st in STATES if st.name == q), STATE_UNITS[q]
     if q in RATE_OF:
-        return ("V", unit), f"{what}: its sensor's voltage (V) or a value set by hand ({unit})"
+        return ("V", COUNTS, unit), (f"{what}: its sensor's voltage (V), an encoder's whole counts ({COUNTS}) "
+                                     f"or a value set by hand ({unit})")
     return ("V",), f"{what}: its sensor's voltage"
 
 
@@ -153,15 +160,27 @@ def _header(source: str, names: list[str], kind: TestKind) -> tuple[list[str], l
             expect = " or ".join(wanted) if wanted else " or ".join(f"{q}_{u}" for u in units)
             raise InputError(source, n, f"unit {unit!r} is not one {q} is recorded in ({what}): "
                                         f"write {expect}")
-        (used if n in kind.columns else ignored).append(n)
+        (used if _as_taken(n, kind) in kind.columns else ignored).append(n)
+    taken = [_as_taken(n, kind) for n in names]
+    if len(set(taken)) < len(taken):
+        n = next(n for n in names if _as_taken(n, kind) != n and _as_taken(n, kind) in names)
+        raise InputError(source, n, f"the position twice: {n} and {_as_taken(n, kind)} (record the encoder or "
+                                    "the pot)")
     for n in kind.required:
-        if n not in names:
+        if n not in taken:
             raise InputError(source, n, f"missing column (the {kind.name} test records "
                                         f"{', '.join(kind.required + kind.any_of + kind.optional)})")
-    if kind.any_of and not any(n in names for n in kind.any_of):
+    if kind.any_of and not any(n in taken for n in kind.any_of):
         raise InputError(source, kind.any_of[0], f"missing column: the {kind.name} test records at least one "
                                                  f"of {', '.join(kind.any_of)}")
     return used, ignored
+
+
+def _as_taken(name: str, kind: TestKind) -> str:
+    """The column a test takes that ``name`` stands for: an encoder's count for the pot's voltage in
+    ENCODER_TESTS (``s_counts`` for ``s_V``), else the name itself."""
+    q, _, unit = name.rpartition("_")
+    return f"{q}_V" if unit == COUNTS and kind.name in ENCODER_TESTS else name
 
 
 def _header_line(source: str, names: list[str], line: str, number: int) -> None:
@@ -248,7 +267,8 @@ MEASURED = ("force_N", "s_V", "theta_V", "s_dot_V", "out_V")  # read off the ben
 def _check_signals(rec: Recording) -> None:
     """Every column a fit uses holds a signal, and no measured channel of a time series is clipped."""
     for name, x in rec.columns.items():
-        problem = signal_problem(split_column(name)[1], x)
+        unit = split_column(name)[1]
+        problem = signal_problem(unit, x) or (whole_counts(x) if unit == COUNTS else None)
         if problem:
             raise rec.error(name, problem)
         settles = rec.test == "coast_down" and name == "s_V"  # the cart comes to rest where it stopped
@@ -336,10 +356,11 @@ def _check_clock(rec: Recording) -> None:
 def _check_pairs(rec: Recording) -> None:
     if rec.test != "calibration":
         return
-    pairs = (("s_m", "s_V"), ("theta_rad", "theta_V"))
+    pairs = [(a, b if b in rec.columns or f"{a.split('_')[0]}_{COUNTS}" not in rec.columns
+              else f"{a.split('_')[0]}_{COUNTS}") for a, b in (("s_m", "s_V"), ("theta_rad", "theta_V"))]
     if not any(a in rec.columns or b in rec.columns for a, b in pairs):
-        raise rec.error("s_m", "missing columns: a calibration records s_m with s_V, theta_rad with theta_V, "
-                               "or both pairs")
+        raise rec.error("s_m", "missing columns: a calibration records s_m with s_V (or s_counts), theta_rad with "
+                               "theta_V (or theta_counts), or both pairs")
     for a, b in pairs:
         if (a in rec.columns) != (b in rec.columns):
             have, lack = (a, b) if a in rec.columns else (b, a)

@@ -24,7 +24,9 @@ from patchgen.identify.recording import Recording
 
 QUIET_LIMIT = 8.0  # a quiet sample beyond this many noise levels (median-based) means the rig moved
 QUIET_BLOCKS = 10  # the recording in this many parts, for a noise scale that a disturbance in one part leaves alone
-SENSORS = {"s_V": ("s", "V/m", "s_m", "m"), "theta_V": ("theta", "V/rad", "theta_rad", "rad")}
+SENSORS = {"s_V": ("s", "V/m", "s_m", "m"), "theta_V": ("theta", "V/rad", "theta_rad", "rad"),
+           "s_counts": ("s_counts", "counts/m", "s_m", "m"), "theta_counts": ("theta_counts", "counts/rad",
+                                                                                "theta_rad", "rad")}
 
 
 def fit_calibration(rec: Recording) -> TestFit:
@@ -39,7 +41,8 @@ def fit_calibration(rec: Recording) -> TestFit:
     Returns
     -------
     TestFit
-        Estimates ``K_s`` (V/m) and/or ``K_theta`` (V/rad).
+        Estimates ``K_s`` (V/m) and/or ``K_theta`` (V/rad); read on an encoder, ``K_s_counts``
+        (counts/m) and/or ``K_theta_counts`` (counts/rad).
     """
     est, panels = {}, []
     for col, (name, unit, ref, ref_unit) in SENSORS.items():
@@ -63,8 +66,8 @@ def fit_calibration(rec: Recording) -> TestFit:
         est[f"K_{name}"] = Estimate(float(coef[0]), float(coef[0] - tq * se), float(coef[0] + tq * se), unit, OLS,
                                     rec.source, dof)
         order = np.argsort(x, kind="stable")
-        panels.append(Panel(x[order], v[order], (X @ coef)[order], f"{name} (V)", xlabel=f"{name} ({ref_unit})",
-                            points=True))
+        panels.append(Panel(x[order], v[order], (X @ coef)[order], f"{name} ({unit.split('/')[0]})",
+                            xlabel=f"{name} ({ref_unit})", points=True))
     return TestFit(rec.source, rec.test, est, panels=panels, title="sensor calibration")
 
 

@@ -241,8 +241,12 @@ def bench_at(bench: BenchProfile, values: dict[str, float]) -> BenchProfile:
         if len(path) == 3:
             target = target[path[1]]
         target[path[-1]] = float(v)
+    touched = {}  # section -> the fields set (a whole dump would put plain dicts where models were)
+    for key in values:
+        touched.setdefault(RANGE_FIELDS[key][0], set()).add(RANGE_FIELDS[key][1])
     return bench.model_copy(update={
-        name: getattr(bench, name).model_copy(update=data[name]) for name in ("actuator", "sensors", "disturbance")})
+        name: getattr(bench, name).model_copy(update={f: data[name][f] for f in fields})
+        for name, fields in touched.items()})
 
 
 def check_bench(bench: BenchProfile, source: str) -> None:

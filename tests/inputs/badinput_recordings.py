@@ -106,6 +106,12 @@ def recording_cases() -> list[Case]:
         _case("quiet-not-quiet", "quiet.csv", _with_column(quiet, "s_V", lambda t, x: x + np.where(t > 1, 1.0, 0.0)),
               "s_V"),
         _case("calibration-one-mark", "calibration.csv", _with_column(cal, "s_m", lambda t, x: 0 * x + 0.1), "s_m"),
+        # an encoder's counts: read with the bench profile's count, whole numbers only
+        _case("counts-without-encoder", "coast-down-1.csv", _with_column(
+            coast, "s_V", lambda t, x: np.round(1e4 * x)).replace("s_V", "s_counts", 1), "s_counts"),
+        _case("counts-not-whole", "free-swing.csv", _with_column(
+            swing, "theta_V", lambda t, x: 100 * x + 0.25).replace("theta_V", "theta_counts", 1), "theta_counts"),
+        _case("counts-and-pot", "coast-down-1.csv", coast.replace("s_V, s_dot_V", "s_V, s_counts", 1), "s_counts"),
         # test figures
         _case("incline-faster-than-frictionless", "incline.toml",
               g["incline.toml"].replace("time_s = ", "time_s = 0.5 #"), "distance_m"),

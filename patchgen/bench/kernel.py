@@ -42,7 +42,7 @@ from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "1c30fc02816408f8"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_IN = "682249bd67c9e18f"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 64  # runs per block
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 N_STATES = len(PLANT_STATES)
@@ -173,7 +173,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     drift = np.empty((na, nl))  # each integrating amplifier drifts one way, drawn per run
     xp = np.empty((N_STATES, nl))
     za = np.empty((na, nl))
-    nf = 0  # the sensors' filters, two states each
+    nf = 0  # the sensors' filters, two states each (patchgen.bench.lanes.sensor_filters)
     for i in range(ns):
         nf = max(nf, sensors.filt[i] + 1)
     xf = np.zeros((2 * nf, nl))
@@ -253,9 +253,9 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
         f_cart, f_tip, s_ref = _disturbances(disturbances, t, h)
         for st in range(4):  # stage 0 reads the step's start itself, the others their own states
             if st > 0:
-                _stage_state(st, h, xp, za, xa, xf, kp, ka, kx, kf, xt, zt, xat, xft)
+                _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat)
             X, Z, XA, XF = (xp, za, xa, xf) if st == 0 else (xt, zt, xat, xft)
-            sensor_filters(X, XF, sensors, kf, st)
+            sensor_filters(X, XF, xf, sensors, kf, st, h)
             circuit(X, Z, XF, s_ref, nz, sensors, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
             drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, forces,
                   at_limit, st)
@@ -268,7 +268,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
                                       lim_t, over, out)
         if n_alive == 0:
             break
-        for i in range(N_STATES):
+        for i in range(N_STATES):  # the plant's (a sensor filter's states advance in sensor_filters)
             for l in range(nl):
                 xp[i, l] += h / 6.0 * (kp[0, i, l] + 2.0 * kp[1, i, l] + 2.0 * kp[2, i, l] + kp[3, i, l])
         for j in range(na):
@@ -279,9 +279,6 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
                 za[j, l] = (sat if v > sat else (-sat if v < -sat else v)) if rail else v
         for l in range(nl):
             xa[l] += h / 6.0 * (kx[0, l] + 2.0 * kx[1, l] + 2.0 * kx[2, l] + kx[3, l])
-        for i in range(2 * nf):
-            for l in range(nl):
-                xf[i, l] += h / 6.0 * (kf[0, i, l] + 2.0 * kf[1, i, l] + 2.0 * kf[2, i, l] + kf[3, i, l])
         trips = 0
         for l in range(nl):
             trips += alive[l] & (not tripped[l]) & (abs(xp[S, l]) >= half[l])
@@ -313,11 +310,11 @@ def _disturbances(dist, t, h):
 
 
 @nb.njit(**_JIT)
-def _stage_state(st, h, xp, za, xa, xf, kp, ka, kx, kf, xt, zt, xat, xft):
+def _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat):
     """The states at RK4 stage st > 0: the step's start + c * the last stage's slopes."""
     nl = xa.shape[0]
     c = h if st == 3 else 0.5 * h
-    for i in range(4):
+    for i in range(4):  # the plant's (a sensor filter's are sensor_filters')
         for l in range(nl):
             xt[i, l] = xp[i, l] + c * kp[st - 1, i, l]
     for j in range(za.shape[0]):
@@ -325,9 +322,6 @@ def _stage_state(st, h, xp, za, xa, xf, kp, ka, kx, kf, xt, zt, xat, xft):
             zt[j, l] = za[j, l] + c * ka[st - 1, j, l]
     for l in range(nl):
         xat[l] = xa[l] + c * kx[st - 1, l]
-    for i in range(xf.shape[0]):
-        for l in range(nl):
-            xft[i, l] = xf[i, l] + c * kf[st - 1, i, l]
 
 
 @nb.njit(**_JIT)

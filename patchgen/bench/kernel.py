@@ -36,13 +36,22 @@ import numba as nb
 import numpy as np
 
 from patchgen.bench.circuit import DIFFERENTIATOR
-from patchgen.bench.lanes import N_ACTUATOR, N_ACTUATOR_ROWS, actuator_rates, circuit, drive, quantised, sensor_filters
+from patchgen.bench.lanes import (
+    FILTER_ROWS,
+    N_ACTUATOR,
+    N_ACTUATOR_ROWS,
+    actuator_rates,
+    circuit,
+    drive,
+    quantised,
+    sensor_filters,
+)
 from patchgen.bench.noise import WORDS, fill_normals
 from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "682249bd67c9e18f"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_IN = "92b32fdf95c0d4fd"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 64  # runs per block
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 N_STATES = len(PLANT_STATES)
@@ -173,12 +182,9 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     drift = np.empty((na, nl))  # each integrating amplifier drifts one way, drawn per run
     xp = np.empty((N_STATES, nl))
     za = np.empty((na, nl))
-    nf = 0  # the sensors' filters, two states each (patchgen.bench.lanes.sensor_filters)
-    for i in range(ns):
-        nf = max(nf, sensors.filt[i] + 1)
-    xf = np.zeros((2 * nf, nl))
-    kf = np.zeros((4, 2 * nf, nl))
-    xft = np.empty((2 * nf, nl))
+    xf = np.zeros((FILTER_ROWS, nl))  # the velocity filter's states (zero when the bench has none)
+    kf = np.zeros((4, FILTER_ROWS, nl))
+    xft = np.zeros((FILTER_ROWS, nl))
     over = np.empty((2, na, nl))  # each lane's overloads (first time, time), copied out at its end
     for l in range(nl):
         plant_coefficients(plants[lo + l], pc[:, l])
@@ -253,9 +259,9 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
         f_cart, f_tip, s_ref = _disturbances(disturbances, t, h)
         for st in range(4):  # stage 0 reads the step's start itself, the others their own states
             if st > 0:
-                _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat)
+                _stage_state(st, h, xp, za, xa, xf, kp, ka, kx, kf, xt, zt, xat, xft)
             X, Z, XA, XF = (xp, za, xa, xf) if st == 0 else (xt, zt, xat, xft)
-            sensor_filters(X, XF, xf, sensors, kf, st, h)
+            sensor_filters(X, XF, sensors, kf, st)
             circuit(X, Z, XF, s_ref, nz, sensors, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
             drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, forces,
                   at_limit, st)
@@ -279,6 +285,9 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
                 za[j, l] = (sat if v > sat else (-sat if v < -sat else v)) if rail else v
         for l in range(nl):
             xa[l] += h / 6.0 * (kx[0, l] + 2.0 * kx[1, l] + 2.0 * kx[2, l] + kx[3, l])
+        for i in range(FILTER_ROWS):
+            for l in range(nl):
+                xf[i, l] += h / 6.0 * (kf[0, i, l] + 2.0 * kf[1, i, l] + 2.0 * kf[2, i, l] + kf[3, i, l])
         trips = 0
         for l in range(nl):
             trips += alive[l] & (not tripped[l]) & (abs(xp[S, l]) >= half[l])
@@ -310,7 +319,7 @@ def _disturbances(dist, t, h):
 
 
 @nb.njit(**_JIT)
-def _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat):
+def _stage_state(st, h, xp, za, xa, xf, kp, ka, kx, kf, xt, zt, xat, xft):
     """The states at RK4 stage st > 0: the step's start + c * the last stage's slopes."""
     nl = xa.shape[0]
     c = h if st == 3 else 0.5 * h
@@ -322,6 +331,9 @@ def _stage_state(st, h, xp, za, xa, kp, ka, kx, xt, zt, xat):
             zt[j, l] = za[j, l] + c * ka[st - 1, j, l]
     for l in range(nl):
         xat[l] = xa[l] + c * kx[st - 1, l]
+    for i in range(FILTER_ROWS):
+        for l in range(nl):
+            xft[i, l] = xf[i, l] + c * kf[st - 1, i, l]
 
 
 @nb.njit(**_JIT)

@@ -25,6 +25,7 @@ N_ACTUATOR = len(ACTUATOR_VECTOR)
 A_INV_TAU, A_KU_TAU = N_ACTUATOR, N_ACTUATOR + 1  # rows actuator_rates adds: 1 / tau, K_U / tau
 N_ACTUATOR_ROWS = N_ACTUATOR + 2
 S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
+FILTER_ROWS = 2  # a sensor filter's states (y, y'): at most one filter, the velocity's
 _JIT = {"cache": True, "error_model": "numpy"}  # as patchgen.bench.kernel's
 
 
@@ -55,15 +56,13 @@ def quantised(x, quantum):
 
 
 @nb.njit(**_JIT)
-def sensor_filters(X, XF, xf, sensors, kf, st, h):
-    """The sensors' filter states through RK4 stage st: filter k holds (y, y') in rows 2k, 2k + 1
-    of a quantised position (of X, the stage's plant states) through
+def sensor_filters(X, XF, sensors, kf, st):
+    """The sensors' filter states at RK4 stage st: filter k holds (y, y') in rows 2k, 2k + 1 of
+    a quantised position (of X, the stage's plant states) through
     wn^2 / (s^2 + 2 zeta wn s + wn^2), and y' is the sensor's reading (a velocity from a filter,
-    as a lab without a tachometer has it). At stage st > 0 it sets the stage's filter states XF
-    from xf (the step's start), then their slopes into kf[st]; after the last stage it advances
-    xf. All of it here: a loop of the filters in the step itself slows every run by a fifth,
-    filters or not (measured)."""
-    c = h if st == 3 else 0.5 * h
+    as a lab without a tachometer has it): their slopes at stage st into kf[st]. The velocity is
+    the one rate a lab's sensors read (patchgen.plant.cart_pendulum.MEASURED), so there is at most
+    one filter: FILTER_ROWS rows, a fixed count, as the step's loops run fastest over."""
     for i in range(sensors.state.shape[0]):
         k = sensors.filt[i]
         if k < 0:
@@ -72,14 +71,8 @@ def sensor_filters(X, XF, xf, sensors, kf, st, h):
         for l in range(X.shape[1]):
             u = quantised(X[q, l], d)
             y = 2 * k
-            if st > 0:
-                XF[y, l] = xf[y, l] + c * kf[st - 1, y, l]
-                XF[y + 1, l] = xf[y + 1, l] + c * kf[st - 1, y + 1, l]
             kf[st, y, l] = XF[y + 1, l]
             kf[st, y + 1, l] = wn * wn * (u - XF[y, l]) - 2.0 * ze * wn * XF[y + 1, l]
-            if st == 3:
-                for r in (y, y + 1):
-                    xf[r, l] += h / 6.0 * (kf[0, r, l] + 2.0 * kf[1, r, l] + 2.0 * kf[2, r, l] + kf[3, r, l])
 
 
 @nb.njit(**_JIT)

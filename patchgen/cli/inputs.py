@@ -8,7 +8,7 @@ from patchgen.bench import budget
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario, check_on_track, load_scenario
 from patchgen.inputs.spec import DesignSpec, load_spec
-from patchgen.profiles.bench import BenchProfile, load_bench
+from patchgen.profiles.bench import BenchProfile, bench_source, check_reads, load_bench
 from patchgen.profiles.machine import MachineProfile, load_machine
 
 MAX_SPICE_POINTS = 10**6  # transient points of an ngspice run (duration / --step)
@@ -18,9 +18,10 @@ def load_inputs(path: str, bench: str | None = None) -> tuple[DesignSpec, Machin
     """The spec and the machine and bench profiles it names, each fully checked; ``bench`` (a
     shipped id or a path, from ``--bench``) replaces the spec's bench."""
     spec = load_spec(path)
-    if bench is not None:
-        return spec, load_machine(spec.machine, spec.path), load_bench(bench, "--bench", "")
-    return spec, load_machine(spec.machine, spec.path), load_bench(spec.bench, spec.path)
+    name, source, field = (bench, "--bench", "") if bench is not None else (spec.bench, spec.path, "bench")
+    profile = load_bench(name, source, field)
+    check_reads(profile, spec.sensors.read(), bench_source(name, source, field))
+    return spec, load_machine(spec.machine, spec.path), profile
 
 
 def scenario_for(path: str, spec: DesignSpec, runs: int = 1, ideal: bool = False) -> Scenario:

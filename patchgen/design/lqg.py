@@ -21,7 +21,7 @@ from patchgen.design.precision import GainSpread
 from patchgen.design.riccati import design_spread, filter_gain, filter_inputs, lqr_gain
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.spec import DesignSpec, q_matrix, r_matrix
-from patchgen.plant.cart_pendulum import ESTIMATED_RATE
+from patchgen.plant.cart_pendulum import ESTIMATED_RATE, RATE_OF
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
@@ -157,11 +157,15 @@ def kalman_controller(model: LinearModel, K: np.ndarray, L: np.ndarray) -> Contr
 
 
 def differentiator_controller(model: LinearModel, K: np.ndarray, rolloff: float) -> Controller:
-    """Static gains on s, theta, s_dot; theta_dot from a differentiator with a first-order roll-off
-    (theta_dot ~ s/(rolloff s + 1) theta); integral states from integrators; an actuator state
-    (if any) from a model of the actuator driven by the commanded force."""
+    """Static gains on the measured signals; each rate not measured (theta_dot, and s_dot on a
+    bench without a velocity sensor) from a differentiator of its position with a first-order
+    roll-off (theta_dot ~ s/(rolloff s + 1) theta); integral states from integrators; an actuator
+    state (if any) from a model of the actuator driven by the commanded force."""
     my = list(model.measured)
-    names: list[str] = ["dfilt_theta"]
+    derived = [(p, r) for p, r in RATE_OF.items() if r not in my]  # theta_dot's first, as the thesis's
+    derived.sort(key=lambda pr: pr[1] != ESTIMATED_RATE)
+    nd = len(derived)
+    names: list[str] = [f"dfilt_{p}" for p, _ in derived]
     ip = integrator_part(model, K)
     inames, Ai, Ei, Ki = ip.names, ip.Ai, ip.Ei, ip.Ki
     names += list(inames)
@@ -171,18 +175,18 @@ def differentiator_controller(model: LinearModel, K: np.ndarray, rolloff: float)
     n = len(names)
     Ac, Bc = np.zeros((n, n)), np.zeros((n, len(my)))
     Cc, Dc = np.zeros((1, n)), np.zeros((1, len(my)))
-    # filter state z' = (theta - z)/rolloff; theta_dot ~ (theta - z)/rolloff
-    it = my.index("theta")
-    Ac[0, 0] = -1.0 / rolloff
-    Bc[0, it] = 1.0 / rolloff
     for st in my:
         Dc[0, my.index(st)] -= K[0, model.index(st)]
-    kd = K[0, model.index(ESTIMATED_RATE)]
-    Dc[0, it] -= kd / rolloff
-    Cc[0, 0] += kd / rolloff
+    for f, (p, rate) in enumerate(derived):  # filter state z' = (p - z)/rolloff; its rate ~ (p - z)/rolloff
+        ip_ = my.index(p)
+        Ac[f, f] = -1.0 / rolloff
+        Bc[f, ip_] = 1.0 / rolloff
+        kd = K[0, model.index(rate)]
+        Dc[0, ip_] -= kd / rolloff
+        Cc[0, f] += kd / rolloff
     for r in range(len(inames)):
-        j = 1 + r
-        Ac[j, 1:1 + len(inames)] = Ai[r]
+        j = nd + r
+        Ac[j, nd:nd + len(inames)] = Ai[r]
         Bc[j] = Ei[r]
         Cc[0, j] -= Ki[0, r]
     if has_act:
@@ -298,10 +302,14 @@ def _estimator(spec: DesignSpec, bench: BenchProfile | None, model: LinearModel,
         if roll is None:
             raise spec.error("estimator.rolloff_s", "missing field (no machine default either)")
         ctl = differentiator_controller(model, K, roll)
-        est = Estimator(kind="differentiator", states=("theta_dot",), L=None, poles=np.array([-1.0 / roll + 0j]),
+        rates = spec.sensors.derived()
+        est = Estimator(kind="differentiator", states=rates, L=None, poles=np.full(len(rates), -1.0 / roll + 0j),
                         rolloff_s=roll)
         return est, ctl, loop_margins(*loop_with_controller(model, ctl))
     if e.kind in ("filtered_differentiator", "reduced_observer"):
+        if e.kind == "reduced_observer" and len(spec.sensors.derived()) > 1:
+            raise spec.error("estimator.kind", "the reduced observer is built for a measured s_dot: without one, a "
+                                               "differentiator or a Kalman filter finds it")
         if bench is None:
             raise ValueError(f"{spec.name}: a {e.kind} estimator is shaped for the bench's noise; pass the bench "
                              f"profile the spec names ({spec.bench!r}, patchgen.profiles.bench.load_bench)")
@@ -382,7 +390,8 @@ def _noise_shaped_estimator(spec: DesignSpec, bench: BenchProfile, model: Linear
         raise spec.error("estimator.observer_pole", str(exc)) from None
     chosen = dict(chosen_from_noise=fixed is None, force_error_rms_N=corner.force_error_rms(model, K, ctl, noise))
     if e.kind == "filtered_differentiator":
-        est = Estimator(kind=e.kind, states=("theta_dot",), L=None, poles=np.array([-1.0 / value + 0j]),
+        rates = spec.sensors.derived()
+        est = Estimator(kind=e.kind, states=rates, L=None, poles=np.full(len(rates), -1.0 / value + 0j),
                         rolloff_s=value, **chosen)
     else:
         obs = reduced_observer(model, value)

@@ -12,7 +12,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from patchgen.inputs.drive_fields import LAG_MODELS, motor_of
-from patchgen.inputs.spec import MEASURED, DesignSpec
+from patchgen.inputs.spec import DesignSpec
 from patchgen.plant.drive import driven
 from patchgen.plant.equations import PLANT_STATES, PlantParams, linear_matrices
 
@@ -84,11 +84,12 @@ def build_model(spec: DesignSpec, plant: PlantParams | None = None) -> LinearMod
         else:
             A[:4, i] = Bp[:, 0] * (act.zero - 1.0 / tau) * scale
             B[:4] = Bp / tau
-    C = np.zeros((len(MEASURED), n))
-    for r, name in enumerate(MEASURED):
+    read = spec.sensors.read()
+    C = np.zeros((len(read), n))
+    for r, name in enumerate(read):
         C[r, states.index(name)] = 1.0
     estimated = tuple(s for s in states if not s.startswith("int_"))
-    return LinearModel(tuple(states), A, B, C, MEASURED, 4, estimated)
+    return LinearModel(tuple(states), A, B, C, read, 4, estimated)
 
 
 def open_loop_poles(model: LinearModel) -> np.ndarray:

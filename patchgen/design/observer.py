@@ -27,6 +27,7 @@ import scipy.linalg as sla
 
 from patchgen.design.controller import Controller, ReducedObserver, integrator_part
 from patchgen.design.model import LinearModel
+from patchgen.plant.cart_pendulum import POSITION, RATE_OF
 
 FIT_TOL = 1e-9  # relative: the structure's linear conditions hold to rounding, and a root is real
 QUADRATIC_MIN = 1e-14  # below this leading coefficient the s_dot condition is linear in the free gain
@@ -45,6 +46,9 @@ def reduced_observer(model: LinearModel, pole: float) -> ReducedObserver:
     """The structured reduced observer of the design model with error decay rate ``pole`` (rad/s)."""
     y = list(model.measured)
     w = list(unmeasured_states(model))
+    if RATE_OF[POSITION] not in y:
+        raise ObserverError(f"the reduced observer is built for a measured {RATE_OF[POSITION]}: without one, "
+                            "a differentiator or a Kalman filter finds it")
     iy = [model.index(s) for s in y]
     iw = [model.index(s) for s in w]
     A, B = model.A, model.B[:, 0]

@@ -18,7 +18,7 @@ from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded, zero_or_at_least
 from patchgen.inputs.resources import resolve
 from patchgen.inputs.validation import read_toml, validate
-from patchgen.plant.cart_pendulum import MEASURED, PARAMETERS
+from patchgen.plant.cart_pendulum import ESTIMATED_RATE, MEASURED, PARAMETERS, RATE_OF
 from patchgen.plant.equations import PLANT_STATES
 
 # weights: Q entries and R within WEIGHT_RANGE (a weight is relative, and a spread of more than
@@ -57,13 +57,26 @@ class SensorSpec(InputModel):
     theta: Real = bounded(*SENSOR_RANGE, description="V/rad")
     s_dot: Real = bounded(*SENSOR_RANGE, description="V/(m/s)")
     theta_dot: Real | None = bounded(*SENSOR_RANGE, default=None, description="V/(rad/s); default theta x 1 s")
+    measured: list[Literal[MEASURED]] = Field(
+        default_factory=lambda: list(MEASURED), description="what the bench's sensors read (default s, theta, "
+        "s_dot); a rate left out is the patch's to find from its position, as theta_dot is: a lab without a "
+        "tachometer leaves out s_dot, whose constant is then the scale of its voltage on the machine")
     labels: dict[Literal[MEASURED], Annotated[str, Field(min_length=1, max_length=80)]] = Field(
         default_factory=dict, description="what reads each quantity, as the sheet names it (default: the thesis "
                                           "bench's pots and tachometer)")
 
     def constants(self) -> dict[str, float]:
-        """Volts per SI unit of each measured quantity (MEASURED), by name."""
-        return {q: getattr(self, q) for q in MEASURED}
+        """Volts per SI unit of each quantity the bench's sensors read, by name, in MEASURED's order."""
+        return {q: getattr(self, q) for q in MEASURED if q in self.measured}
+
+    def read(self) -> tuple[str, ...]:
+        """The quantities the sensors read, in MEASURED's order."""
+        return tuple(q for q in MEASURED if q in self.measured)
+
+    def derived(self) -> tuple[str, ...]:
+        """The rates the patch finds from their positions: theta_dot always, s_dot without a sensor."""
+        rates = [r for r in RATE_OF.values() if r not in self.measured]
+        return tuple(sorted(rates, key=lambda r: r != ESTIMATED_RATE))  # theta_dot first, as the thesis's
 
 
 MIN_LAG_S = 1e-3  # a lag shorter than 1 ms is a gain to the loop, and would set a needlessly fine step
@@ -185,6 +198,11 @@ class DesignSpec(InputModel):
     def theta_dot_scale(self) -> float:
         """V per rad/s of the voltage carrying theta_dot: the spec's, else the theta sensor's."""
         return self.sensors.theta_dot if self.sensors.theta_dot is not None else self.sensors.theta
+
+    def rate_scale(self, rate: str) -> float:
+        """V per SI unit of the voltage carrying a rate the patch finds (sensors.derived): theta_dot's
+        as theta_dot_scale says, s_dot's its sensor constant (the scale its tachometer would have)."""
+        return self.theta_dot_scale() if rate == ESTIMATED_RATE else getattr(self.sensors, rate)
 
 
 def load_spec(path: str | Path) -> DesignSpec:
@@ -351,6 +369,18 @@ def check_spec(spec: DesignSpec) -> None:
     if a.model == "dc_motor" and a.tau > 0:
         raise err("actuator.tau", "a dc_motor's design model has no lag: its current follows the voltage (state "
                                   "the armature's inductance L_m in the bench profile, whose simulation has it)")
+    read = spec.sensors.measured
+    for q in MEASURED:
+        if read.count(q) > 1:
+            raise err("sensors.measured", f"names {q} twice")
+    for p in RATE_OF:
+        if p not in read:
+            raise err("sensors.measured", f"must include {p}: a position is read on its sensor (the patch finds "
+                                          "a rate from its position, not the other way round)")
+    if len(spec.sensors.derived()) > 1 and spec.estimator.kind == "reduced_observer":
+        raise err("estimator.kind", "the reduced observer is built for a measured s_dot: with s_dot left out of "
+                                    "sensors.measured, choose \"differentiator\", \"filtered_differentiator\" or "
+                                    "\"kalman\"")
     if spec.estimator.kind == "kalman":
         _check_kalman(spec, len(PLANT_STATES) + (1 if a.model in LAG_MODELS else 0))
 
@@ -387,7 +417,9 @@ def _check_kalman(spec: DesignSpec, n_est: int) -> None:
         V = matrix(e.V, "estimator.V", err)
     else:
         V = np.diag(np.array(e.V, dtype=float)) if e.V else np.zeros((0, 0))
-    if V.shape != (len(MEASURED), len(MEASURED)):
-        raise err("estimator.V", f"must be 3 values or 3x3 for the measured {', '.join(MEASURED)}")
+    read = spec.sensors.read()
+    if V.shape != (len(read), len(read)):
+        raise err("estimator.V", f"must be {len(read)} values or {len(read)}x{len(read)} for the measured "
+                                 f"{', '.join(read)}")
     if np.linalg.eigvalsh((V + V.T) / 2).min() < MIN_V_EIGENVALUE:
         raise err("estimator.V", f"must be positive definite (smallest eigenvalue at least {MIN_V_EIGENVALUE:g})")

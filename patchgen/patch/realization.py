@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from patchgen.design.lqg import Design
-from patchgen.plant.cart_pendulum import ESTIMATED_RATE, MEASURED, SENSOR_LABELS
+from patchgen.plant.cart_pendulum import MEASURED, POSITION_OF, SENSOR_LABELS
 from patchgen.plant.cart_pendulum import STATE_UNITS as PLANT_UNITS
 from patchgen.profiles.machine import MachineProfile
 
@@ -97,17 +97,17 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
     if e == "reduced_observer":
         return _reduced_observer(design, ks, KU, T, max(machine.input_weights) * machine.pot_max,
                                  integrator_reach(machine))
-    if "theta_dot" in states:
+    for rate in (r for r in spec.sensors.derived() if r in states):
         if e == "none":
-            raise spec.error("estimator.kind", "theta_dot is not measured on the bench: choose "
+            raise spec.error("estimator.kind", f"{rate} is not measured on the bench: choose "
                              "\"differentiator\", \"filtered_differentiator\", \"reduced_observer\" or "
                              "\"kalman\" to patch this design")
-        roll = design.estimator.rolloff_s
-        scale["theta_dot"] = spec.theta_dot_scale()
-        blocks.append(Block("theta_dot", "differentiate", (Term("theta", 1.0),), scale["theta_dot"], "rad/s",
-                            "theta_dot from theta (practical differentiator)" if e == "differentiator" else
-                            f"theta_dot from theta (differentiator, roll-off {roll:g} s chosen from the noise)",
-                            T_d_s=scale["theta_dot"] / ks["theta"], rolloff_s=roll))
+        roll, pos = design.estimator.rolloff_s, POSITION_OF[rate]
+        scale[rate] = spec.rate_scale(rate)
+        blocks.append(Block(rate, "differentiate", (Term(pos, 1.0),), scale[rate], STATE_UNITS[rate],
+                            f"{rate} from {pos} (practical differentiator)" if e == "differentiator" else
+                            f"{rate} from {pos} (differentiator, roll-off {roll:g} s chosen from the noise)",
+                            T_d_s=scale[rate] / ks[pos], rolloff_s=roll))
     ints, int_scale, notes = _integral_blocks(design, ks, T)
     blocks += ints
     scale.update(int_scale)
@@ -177,7 +177,7 @@ def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
     Ae, Be, Ce = model.submodel(est)
     L = design.estimator.L
     sc = spec.actuator.state_scale
-    sv = {**{q: ks[q] for q in MEASURED}, ESTIMATED_RATE: spec.theta_dot_scale(), "actuator": sc / KU}
+    sv = {**ks, **{r: spec.rate_scale(r) for r in spec.sensors.derived()}, "actuator": sc / KU}
     S = np.diag([sv[s] for s in est])
     Sy = np.diag([ks[m] for m in model.measured])
     Av = S @ (Ae - L @ Ce) @ np.linalg.inv(S)

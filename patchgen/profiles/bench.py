@@ -84,7 +84,8 @@ class BenchSensors(InputModel):
 
     s: Real = bounded(1e-3, 1e3)
     theta: Real = bounded(1e-3, 1e3)
-    s_dot: Real = bounded(1e-3, 1e3)
+    s_dot: Real | None = bounded(1e-3, 1e3, default=None, description="V/(m/s); none: the bench has no velocity "
+                                 "signal (no tachometer, no filter), and a patch finds s_dot from s")
     noise_V_rms: dict[Literal[MEASURED], Annotated[Real, Field(ge=0, le=100)]] = Field(
         default_factory=dict)
     noise_bandwidth_Hz: Real = bounded(1e-3, 1e9, default=200.0)
@@ -167,6 +168,26 @@ def bench_scenarios(bench: BenchProfile) -> tuple[str, ...]:
     return tuple(bench.scenarios) or STANDARD_SCENARIOS
 
 
+def check_reads(bench: BenchProfile, read: tuple[str, ...], bench_source: str) -> None:
+    """Every quantity a design reads is one this bench measures (a velocity without a signal is
+    the patch's to find: leave it out of the spec's sensors.measured).
+
+    Raises
+    ------
+    InputError
+        Naming the bench's missing sensor.
+    """
+    for q in read:
+        if getattr(bench.sensors, q, None) is None:
+            raise InputError(bench_source, f"sensors.{q}", f"missing: the spec reads {q} on this bench (or leave {q} "
+                             "out of the spec's sensors.measured, and the patch finds it)")
+
+
+def bench_source(name_or_path: str, source: str = "", field: str = "bench") -> str:
+    """The file a bench profile is read from, as an error names it (a shipped one by its path too)."""
+    return str(resolve("bench", name_or_path, source, field))
+
+
 def load_bench(name_or_path: str, source: str = "", field: str = "bench") -> BenchProfile:
     """Load a shipped bench profile by id (e.g. 'uw-1991') or a file by path.
 
@@ -207,6 +228,13 @@ def _scenarios_found(bench: BenchProfile, where) -> BenchProfile:
         found.append(str(path))
         load_scenario(found[-1]).judged()
     return bench.model_copy(update={"scenarios": found})
+
+
+def nominal_or_none(bench: BenchProfile, key: str) -> float | None:
+    """The profile's own value of an uncertain parameter, None where the bench has no such signal."""
+    path = RANGE_FIELDS[key]
+    section = getattr(bench, path[0])
+    return getattr(section, path[1]) if len(path) == 2 else nominal(bench, key)
 
 
 def nominal(bench: BenchProfile, key: str) -> float:
@@ -259,6 +287,10 @@ def check_bench(bench: BenchProfile, source: str) -> None:
     InputError
         The first bad range, naming ``uncertainty.<key>``.
     """
+    for q in bench.sensors.velocity_filter:
+        if getattr(bench.sensors, q) is None:
+            raise InputError(source, f"sensors.velocity_filter.{q}", "filters a velocity the bench gives no signal "
+                             f"of: state its constant sensors.{q} (V per SI unit of the filter's output)")
     for key, rng in bench.uncertainty.ranges.items():
         field = f"uncertainty.{key}"
         if key not in RANGE_FIELDS and isinstance(rng, dict) and any(f"{key}.{k}" in RANGE_FIELDS for k in rng):
@@ -272,6 +304,8 @@ def check_bench(bench: BenchProfile, source: str) -> None:
         if problem:
             raise InputError(source, field, problem)
         lo, hi = float(rng[0]), float(rng[1])
+        if RANGE_FIELDS[key][0] == "sensors" and len(RANGE_FIELDS[key]) == 2 and nominal_or_none(bench, key) is None:
+            raise InputError(source, field, f"the bench has no {RANGE_FIELDS[key][1]} signal to be uncertain about")
         nom = nominal(bench, key)
         where = ".".join(RANGE_FIELDS[key])
         if not lo <= nom <= hi:

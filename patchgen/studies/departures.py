@@ -150,6 +150,7 @@ def realisation_whys(sp: DesignSpec, design: Design | None, bench: BenchProfile,
         "estimator.rolloff_s": roll,
         "estimator.observer_pole": noise if kind == "reduced_observer" else unused,
         "estimator.rho": "the LTR factor the Kalman design settled on",
+        "estimator.V": "unit sensor noise, one per signal the bench gives (the spec's default, sized to what it reads)",
         "actuator": (f"the bench's actuator ({bench.id}: {act}, dead zone +/-{b.dead_zone_V:g} V) designed in: "
                      "the spec's design model is not what the patch meets"),
         "patch.realization": "recommend also tries the Kalman compensator patched as one system",

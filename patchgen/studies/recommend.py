@@ -85,6 +85,9 @@ def candidate_specs(spec: DesignSpec, bench: BenchProfile) -> list[tuple[str, st
             upd: dict = {"kind": kind}
             if kind != e.kind or suffix:
                 upd.update(rolloff_s=None, observer_pole=None)
+            read = spec.sensors.read()
+            if kind == "kalman" != e.kind and e.V and not isinstance(e.V[0], list) and len(e.V) != len(read):
+                upd["V"] = [1.0] * len(read)  # the default's unit noise, one per signal the bench gives
             est = e.model_copy(update=upd)
             # wired as its states: the compensator as one system is compensator_specs' candidate
             patch = spec.patch.model_copy(update={"realization": "states", "order": "full"})

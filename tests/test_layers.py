@@ -26,18 +26,18 @@ import patchgen
 
 PKG = Path(patchgen.__file__).parent
 
-DEPENDS = {  # each folder's direct foundations (render sits below the simulator today: it plots for bench)
+DEPENDS = {  # each folder's direct foundations (render above the simulator; to rise above the studies next)
     "plant": (),
     "inputs": ("plant",),
     "profiles": ("inputs",),
     "design": ("profiles",),
     "patch": ("design",),
-    "render": ("patch",),
-    "bench": ("render",),
-    "identify": ("bench",),
-    "spice": ("bench",),
-    "swingup": ("bench",),
-    "studies": ("bench",),
+    "bench": ("patch",),
+    "render": ("bench",),
+    "identify": ("render",),
+    "spice": ("render",),
+    "swingup": ("render",),
+    "studies": ("render",),
     "pipeline": ("identify", "spice", "swingup", "studies"),
     "cli": ("pipeline",),
 }

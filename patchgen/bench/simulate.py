@@ -17,7 +17,7 @@ with the differentiator's roll-off (tests/bench/test_simulate.py checks this).
 
 The pieces: patchgen.bench.configure resolves the inputs into the engine's records,
 patchgen.bench.engine runs them, patchgen.bench.results summarises the runs, and
-patchgen.bench.files renders the result's files as bytes for patchgen.render.outputs.write_files.
+patchgen.render.simulation_files renders the result's files as bytes for patchgen.render.outputs.write_files.
 """
 
 from __future__ import annotations
@@ -35,7 +35,6 @@ from patchgen.bench.engine import LANES, default_step, draw_batch, run_batch
 from patchgen.bench.engine import drawn as engine_drawn
 from patchgen.bench.kernel import HISTORY_CHANNELS
 from patchgen.bench.results import RunSummary, SimResult, distribution, run_summaries
-from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
 from patchgen.patch.netlist import Netlist
 from patchgen.plant.equations import PlantParams
@@ -91,12 +90,12 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     SimResult
         The runs' summaries, their distribution, the settings and the first run's history.
     """
-    if runs < 1:
-        raise InputError("--runs", "", f"must be at least 1 (got {runs})")
+    if runs < 1:  # a caller's mistake: the command line's options and the scenario's fields are bounded
+        raise ValueError(f"runs must be at least 1 (got {runs})")
     circuit = compile_circuit(netlist, machine, bench)
     base_seed = scenario.seed if seed is None else seed
     if not 0 <= base_seed < 2**63:
-        raise InputError("--seed", "", f"must be between 0 and 2**63 - 1 (got {base_seed})")
+        raise ValueError(f"seed must be between 0 and 2**63 - 1 (got {base_seed})")
     if first_run < 0:
         raise ValueError(f"first_run must be at least 0 (got {first_run})")
     cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal, spread=spread,

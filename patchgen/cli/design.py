@@ -8,8 +8,9 @@ import click
 from rich.console import Console
 
 from patchgen.design.lqg import Design, design_on
-from patchgen.design.report import design_dict, print_design
+from patchgen.design.report import design_dict
 from patchgen.profiles.machine import MachineProfile
+from patchgen.render.design_tables import print_design
 
 from . import cli
 from .inputs import load_inputs

@@ -9,11 +9,11 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from patchgen.bench.files import output_files
 from patchgen.bench.results import SimResult
 from patchgen.pipeline.simulate import SimulatePlan, run_simulate
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.render.simulation_files import output_files
 from patchgen.studies import bench_corners
 
 from . import cli

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from patchgen.bench.files import output_files
 from patchgen.bench.simulate import simulate
 from patchgen.inputs.scenario import Scenario, load_scenario
 from patchgen.patch.netlist import Netlist, read_netlist
 from patchgen.plant.equations import PlantParams, linear_matrices
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
+from patchgen.render.simulation_files import output_files
 
 ROOT = Path(__file__).resolve().parents[2]
 SIMS = ROOT / "sims"

@@ -13,9 +13,10 @@ from rich.console import Console
 from patchgen.design.lqg import design
 from patchgen.design.margins import loop_margins
 from patchgen.design.precision import significant_digits
-from patchgen.design.report import REPORT_DIGITS, design_dict, margins_dict, margins_table, print_design
+from patchgen.design.report import design_dict, margins_dict
 from patchgen.inputs.spec import load_spec
 from patchgen.profiles.bench import load_bench
+from patchgen.render.design_tables import REPORT_DIGITS, margins_table, print_design
 
 BENCH = load_bench("uw-1991")
 MARGIN_KEYS = {"stable", "lower_gm", "lower_gm_db", "upper_gm", "upper_gm_db", "pm_deg", "pm_freq",

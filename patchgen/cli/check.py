@@ -3,7 +3,6 @@ fault when they differ."""
 
 from __future__ import annotations
 
-import json
 import sys
 
 import click
@@ -17,6 +16,7 @@ from patchgen.patch.build import build_patch
 from patchgen.patch.fault_finding import diagnose_readings
 from patchgen.patch.readings import load_readings
 from patchgen.patch.static_check import static_check
+from patchgen.render.outputs import json_text
 
 from . import cli
 from .inputs import load_inputs
@@ -43,11 +43,11 @@ def check_cmd(spec: str, readings_path: str, as_json: bool) -> None:
     measured = load_readings(readings_path, check, machine)
     verdict = diagnose_readings(net, machine, check, measured)
     if as_json:
-        click.echo(json.dumps({
+        click.echo(json_text({
             "design": net.design, "agree": verdict.agree, "mismatched": list(verdict.mismatched),
             "faults": [{"kind": f.kind, "description": f.description, "chi_square": f.score,
-                        "explained": f.explained, "of": f.of, "consistent": f.consistent} for f in verdict.faults]},
-            indent=2, sort_keys=True, allow_nan=False))
+                        "explained": f.explained, "of": f.of, "consistent": f.consistent} for f in verdict.faults]}),
+            nl=False)
     else:
         console = Console()
         if verdict.agree:

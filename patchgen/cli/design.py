@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 from rich.console import Console
 
@@ -11,6 +9,7 @@ from patchgen.design.lqg import Design, design_on
 from patchgen.design.report import design_dict
 from patchgen.profiles.machine import MachineProfile
 from patchgen.render.design_tables import print_design
+from patchgen.render.outputs import json_text
 
 from . import cli
 from .inputs import load_inputs
@@ -30,6 +29,6 @@ def design_cmd(spec: str, as_json: bool) -> None:
     """Compute the LQR gain, Kalman estimator, loop transfer recovery and loop margins of SPEC."""
     d, _ = design_from_path(spec)
     if as_json:
-        click.echo(json.dumps(design_dict(d), indent=2, sort_keys=True, allow_nan=False))
+        click.echo(json_text(design_dict(d)), nl=False)
     else:
         print_design(d, Console())

@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 from rich.console import Console
 
 from patchgen.bench.diagnosis import as_patched_on_bench
 from patchgen.design.lqg import design_on
 from patchgen.patch.build import build_patch
-from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.render.outputs import check_out_dir, json_text, write_files
 from patchgen.render.patchfiles import PATCH_FILES, patch_files
 from patchgen.render.pottable import pot_rows, pot_table
 from patchgen.studies.bench_sheet import HOLD_RUNS, predicted_patch_files
@@ -40,13 +38,12 @@ def patch_cmd(spec: str, out_dir: str, force: bool, runs_hold: int, no_predict: 
              else predicted_patch_files(d, machine, bench, net, runs_hold=runs_hold, judged=judged))
     written = write_files(out_dir, files, force=force)
     if as_json:
-        click.echo(json.dumps({"design": net.design, "machine": net.machine, "units": net.units,
-                               "pots": pot_rows(net), "amplifiers": [{"id": a.id, "role": a.role,
-                                                                      "carries": a.carries.model_dump()}
-                                                                     for a in net.amplifiers],
-                               "notes": net.notes, "margins": judged.as_dict(),
-                               "written": [str(p) for p in written]},
-                              indent=2, sort_keys=True, allow_nan=False))
+        click.echo(json_text({"design": net.design, "machine": net.machine, "units": net.units,
+                              "pots": pot_rows(net), "amplifiers": [{"id": a.id, "role": a.role,
+                                                                     "carries": a.carries.model_dump()}
+                                                                    for a in net.amplifiers],
+                              "notes": net.notes, "margins": judged.as_dict(),
+                              "written": [str(p) for p in written]}), nl=False)
         return
     console = Console()
     console.print(pot_table(net, machine.procedure.pot_setting))

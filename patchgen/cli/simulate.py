@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
@@ -12,7 +11,7 @@ from rich.table import Table
 from patchgen.bench.results import SimResult
 from patchgen.pipeline.simulate import SimulatePlan, run_simulate
 from patchgen.render import plot_helper
-from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.render.outputs import check_out_dir, json_text, write_files
 from patchgen.render.simulation_files import output_files
 from patchgen.studies import bench_corners
 
@@ -155,7 +154,7 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
     files["netlist.json"] = report.netlist.to_json().encode()
     written = write_files(out_dir, files, force=force)
     if as_json:
-        click.echo(json.dumps(summary, indent=2, sort_keys=True, allow_nan=False))
+        click.echo(json_text(summary), nl=False)
         return
     console = Console()
     console.print(summary_table(report.result))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 import tempfile
 from pathlib import Path
@@ -18,7 +17,7 @@ from patchgen.design.lqg import design_on
 from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.render import plot_helper
-from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.render.outputs import check_out_dir, json_text, write_files
 from patchgen.spice.compare import compare, comparison_plot
 from patchgen.spice.deck import OPAMP_MODEL, SpiceSettings, spice_deck
 from patchgen.spice.run import NgspiceError, NgspiceMissing, run_ngspice
@@ -103,10 +102,10 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_js
               "signals": {k: {"rms_rel": v.rms_rel, "max_rel": v.max_rel, "peak": v.peak}
                           for k, v in cmp.signals.items()},
               "agrees": cmp.agrees(tolerance)}
-    files["comparison.json"] = json.dumps(report, indent=2, sort_keys=True, allow_nan=False) + "\n"
+    files["comparison.json"] = json_text(report)
     written = write_files(out_dir, files, force=force)
     if as_json:
-        click.echo(json.dumps(report, indent=2, sort_keys=True, allow_nan=False))
+        click.echo(json_text(report), nl=False)
     else:
         t = Table(title=f"ngspice against patchgen: {d.spec.name}, {scenario.name}"
                   + (" (ideal: noise, drift off; ideal actuator; op-amp macromodels)" if ideal else ""),

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 from rich.console import Console
 from rich.table import Table
 
 from patchgen.design.lqg import design_on
 from patchgen.plant.cart_pendulum import UNCERTAIN
+from patchgen.render.outputs import json_text
 from patchgen.studies.sweep import sweep
 
 from . import cli
@@ -42,7 +41,7 @@ def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: s
     rows = sweep(d.spec, machine, names, by, workers, scenario, runs, bench=bench)
     states = list(d.states)
     if as_json:
-        click.echo(json.dumps([r.as_dict() for r in rows], indent=2, sort_keys=True, allow_nan=False))
+        click.echo(json_text([r.as_dict() for r in rows]), nl=False)
         return
     t = Table(title=f"{d.spec.name}: LQR gain K (u = -K x) with parameters off by {by:.0%}", title_justify="left")
     t.add_column("case")

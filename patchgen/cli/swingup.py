@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict
 
 import click
@@ -13,7 +12,7 @@ from patchgen.design.lqg import design_on
 from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.render import plot_helper
-from patchgen.render.outputs import check_out_dir, write_files
+from patchgen.render.outputs import check_out_dir, json_text, write_files
 from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.sheet import SheetSection
 from patchgen.studies.bench_sheet import predicted_patch_files
@@ -85,7 +84,7 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg
             comparison = compare_strategies(plant, F, d.K[:, :4], m.zone)
         summary["comparison"] = [{k: v.item() if hasattr(v, "item") else v for k, v in asdict(r).items()}
                                  for r in comparison]
-    files["manoeuvre.json"] = json.dumps(summary, indent=2, sort_keys=True, allow_nan=False) + "\n"
+    files["manoeuvre.json"] = json_text(summary)
     written = write_files(out_dir, files, force=force)
     if as_json:
         click.echo(files["manoeuvre.json"], nl=False)

@@ -4,11 +4,11 @@ checks and notes, and the warnings."""
 
 from __future__ import annotations
 
-import json
 import math
 
 from patchgen.identify.estimate import Estimate
 from patchgen.identify.identify import Identification, Parameter
+from patchgen.render.outputs import json_text
 
 TITLE = "Bench identification"
 
@@ -84,7 +84,7 @@ def report_json(result: Identification, files: list[str], plots: dict[str, str])
             "extra": {k: e.to_dict() for k, e in result.extra.items()},
             "checks": [c.to_dict() for c in result.checks],
             "recordings": [dict(f.to_dict(), plot=plots.get(f.source)) for f in result.fits]}
-    return json.dumps(_plain(data), indent=2, sort_keys=True, allow_nan=False) + "\n"
+    return json_text(_plain(data))
 
 
 def _plain(x):

@@ -4,12 +4,11 @@ and margins.json."""
 
 from __future__ import annotations
 
-import json
-
 from patchgen.design.margins import Margins
 from patchgen.patch import compensator_fit
 from patchgen.patch.as_patched import FIXED_TOL, AsPatched, LoopFigures
 from patchgen.patch.law_error import LawError
+from patchgen.render.outputs import json_text
 
 MARGINS_SCHEMA = "patchgen.margins/1"
 NEGLIGIBLE = 1e-4  # a relative error below this prints as "< 0.01 %" (its digits are the arithmetic's)
@@ -66,8 +65,7 @@ def patched_banner(j: AsPatched) -> str:
 
 def margins_json(j: AsPatched, design: str) -> str:
     """margins.json: the loops as designed and as patched, the wired law's error and its causes."""
-    return json.dumps({"schema": MARGINS_SCHEMA, "design": design, **j.as_dict()}, indent=2, sort_keys=True,
-                      allow_nan=False) + "\n"
+    return json_text({"schema": MARGINS_SCHEMA, "design": design, **j.as_dict()})
 
 
 def percent(x: float) -> str:

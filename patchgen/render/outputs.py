@@ -21,6 +21,13 @@ from pathlib import Path
 from patchgen.inputs.errors import InputError
 
 KERNEL_FILE_SYSTEMS = ("/proc", "/sys", "/dev")
+
+
+def json_text(data) -> str:
+    """Every JSON patchgen writes or prints, one way: sorted keys, two-space indent, a final newline,
+    no NaN or infinity (a non-finite figure is a bug, not a value), so the same data gives the same
+    bytes."""
+    return json.dumps(data, indent=2, sort_keys=True, allow_nan=False) + "\n"
 NAME_MAX = 255  # bytes in one file name, when the file system does not say
 PATH_MAX = 4096  # bytes in a whole path, likewise
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 
 import numpy as np
@@ -16,6 +15,7 @@ import numpy as np
 from patchgen.bench.results import SimResult
 from patchgen.plant.cart_pendulum import POSITION, STATE_UNITS
 from patchgen.render import plot_helper
+from patchgen.render.outputs import json_text
 
 FONT_SIZE = 8  # points: the plot's text, small enough for a panel 1.5 inches high
 _UNITS = {"t": "s", **{q: u.replace("/", "_per_") for q, u in STATE_UNITS.items()},  # a column name's unit
@@ -45,8 +45,7 @@ def output_files(result: SimResult, svg: bool = False, summary: dict | None = No
     if result.history is not None:
         files["history.csv"] = _history_csv(result.history).encode()
     files["runs.csv"] = _runs_csv(result).encode()
-    files["summary.json"] = (json.dumps(result.summary() if summary is None else summary, indent=2, sort_keys=True,
-                                        allow_nan=False) + "\n").encode()
+    files["summary.json"] = json_text(result.summary() if summary is None else summary).encode()
     if plot is not None:
         files.update(plot.result())
     return files

@@ -3,7 +3,6 @@ section, the sheet's 'Why this patch' table, and the files the recommend command
 
 from __future__ import annotations
 
-import json
 import math
 
 from patchgen.bench.prediction import STANDARD
@@ -11,6 +10,7 @@ from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.spec_file import spec_toml
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.render.outputs import json_text
 from patchgen.render.sheet import SheetSection
 from patchgen.studies.bench_sheet import predicted_patch_files
 from patchgen.studies.candidate import Candidate, Recommendation
@@ -309,7 +309,7 @@ def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: Be
             + (f"\nIt departs from {rec.spec.name} in:{departs}" if departs else "")))
     files["recommendation.md"] = (f"# Why this patch\n\n{table_markdown(rec, machine.reference_V)}"
                                   + departures_markdown(rec))
-    files["recommendation.json"] = json.dumps({
+    files["recommendation.json"] = json_text({
         "spec": rec.spec.name, "bench": bench.id, "machine": machine.id,
         "scenarios": [{"name": sc.name, "seed": rec.seed_of(sc)} for sc in rec.scenarios],
         "max_runs": rec.max_runs, "target": TARGET, "chosen": None if best is None else best.label,
@@ -317,5 +317,5 @@ def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: Be
         "corner_runs": CORNER_RUNS if rec.ranges else None, "robust": robust_text(rec) or None,
         "verdict": verdict_text(rec), "variants": list(rec.variants),
         "departures": [] if best is None else [d.as_dict() for d in best.departures],
-        "candidates": table_rows(rec)}, indent=2, sort_keys=True, allow_nan=False) + "\n"
+        "candidates": table_rows(rec)})
     return files

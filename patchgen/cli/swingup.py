@@ -2,23 +2,18 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict
-
 import click
 from rich.console import Console
 from rich.table import Table
 
-from patchgen.design.lqg import design_on
-from patchgen.design.model import plant_params
-from patchgen.patch.build import build_patch
+from patchgen.pipeline.swingup import SwingupPlan, run_swingup
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, json_text, write_files
 from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.sheet import SheetSection
 from patchgen.studies.bench_sheet import predicted_patch_files
-from patchgen.swingup.manoeuvre import BENCH_HOLD_S, manoeuvre, plot_manoeuvre
+from patchgen.swingup.manoeuvre import BENCH_HOLD_S, plot_manoeuvre
 from patchgen.swingup.output import compact_schedule_rows, output_files, patch_sheet_rows
-from patchgen.swingup.run import compare_strategies
 from patchgen.swingup.strategies import STRATEGIES
 
 from . import cli
@@ -53,18 +48,11 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg
     check_out_dir(out_dir, SWINGUP_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one computes
     sp, machine, bench = load_inputs(spec)
-    d = design_on(sp, machine, bench)
-    net = build_patch(d, machine)
-    plant = plant_params(d.spec)
-    F = force_limit or bench.actuator.force_limit_N
-    m = manoeuvre(net, plant, bench, machine, d.K[:, :4], strategy, F, hold_s, seed)
+    plan = SwingupPlan(strategy=strategy, force_limit_N=force_limit, hold_s=hold_s, seed=seed, compare=compare)
+    report = run_swingup(sp, machine, bench, plan, comparing=lambda: Console(stderr=True).status(
+        "comparing the three strategies on the nominal and +/-10% plants"))
+    d, net, plant, m, F = report.design, report.netlist, report.plant, report.manoeuvre, report.force_limit_N
     p = m.pump
-    summary = {"design": d.spec.name, "strategy": strategy, "force_limit_N": F,
-               "reached_zone": p.reached, "handoff_time_s": p.handoff_time,
-               "max_abs_s_pump_m": p.max_abs_s_pump, "track_half_m": plant.d / 2,
-               "hold_s": hold_s, "held": m.held,
-               "hold": None if m.hold is None else {k: v for k, v in m.hold.summary()["first_run"].items()
-                                                    if k != "final_state"}}
     rows = patch_sheet_rows(p)
     section = SheetSection(f"Pump-up schedule ({strategy}, {F:g} N)", *compact_schedule_rows(p),
                            "Switch times for the operator or a sequencer, from hanging at rest; hand off (IC -> OP) "
@@ -75,16 +63,8 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg
     job = plot_helper.submit(pump_and_manoeuvre_files, p, m, title, svg)
     files = predicted_patch_files(d, machine, bench, net, [section], runs_hold=SHEET_HOLD_RUNS)
     files.update(job.result())
-    if m.sensitivity is not None:
-        summary["schedule_sensitivity"] = [{k: v.item() if hasattr(v, "item") else v for k, v in asdict(r).items()}
-                                           for r in m.sensitivity]
-    comparison = None
-    if compare:
-        with Console(stderr=True).status("comparing the three strategies on the nominal and +/-10% plants"):
-            comparison = compare_strategies(plant, F, d.K[:, :4], m.zone)
-        summary["comparison"] = [{k: v.item() if hasattr(v, "item") else v for k, v in asdict(r).items()}
-                                 for r in comparison]
-    files["manoeuvre.json"] = json_text(summary)
+    comparison = report.comparison
+    files["manoeuvre.json"] = json_text(report.summary())
     written = write_files(out_dir, files, force=force)
     if as_json:
         click.echo(files["manoeuvre.json"], nl=False)

@@ -1,0 +1,97 @@
+"""patchgen swingup as one function: the spec's patch, the pump-up from hanging with its strategy,
+the hand-off and the patched hold on the bench, and, when asked, the strategies compared; into one
+report whose ``summary()`` is manoeuvre.json and ``--json``."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from patchgen.design.lqg import Design, design_on
+from patchgen.design.model import plant_params
+from patchgen.inputs.spec import DesignSpec
+from patchgen.patch.build import build_patch
+from patchgen.patch.netlist import Netlist
+from patchgen.plant.equations import PlantParams
+from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
+from patchgen.swingup.manoeuvre import BENCH_HOLD_S, Manoeuvre, manoeuvre
+from patchgen.swingup.run import StrategySummary, compare_strategies
+
+
+@dataclass(frozen=True)
+class SwingupPlan:
+    """The strategy, the pump-up's force limit (None: the bench actuator's), the hold after the
+    hand-off (s), the hold's noise seed, and whether to compare the strategies too."""
+
+    strategy: str = "supervisory"
+    force_limit_N: float | None = None
+    hold_s: float = BENCH_HOLD_S
+    seed: int = 0
+    compare: bool = False
+
+
+@dataclass(frozen=True)
+class SwingupReport:
+    """What the manoeuvre did: the design and its patch, the force the pump-up used, the manoeuvre
+    (pump-up, zone, hold, schedule sensitivity) and the strategies compared."""
+
+    design: Design
+    netlist: Netlist
+    plant: PlantParams
+    plan: SwingupPlan
+    force_limit_N: float
+    manoeuvre: Manoeuvre
+    comparison: tuple[StrategySummary, ...] | None
+
+    def summary(self) -> dict:
+        """Every figure and verdict, as plain JSON-able data (manoeuvre.json, --json)."""
+        m, p = self.manoeuvre, self.manoeuvre.pump
+        out = {"design": self.design.spec.name, "strategy": self.plan.strategy, "force_limit_N": self.force_limit_N,
+               "reached_zone": p.reached, "handoff_time_s": p.handoff_time,
+               "max_abs_s_pump_m": p.max_abs_s_pump, "track_half_m": self.plant.d / 2,
+               "hold_s": self.plan.hold_s, "held": m.held,
+               "hold": None if m.hold is None else {k: v for k, v in m.hold.summary()["first_run"].items()
+                                                    if k != "final_state"}}
+        if m.sensitivity is not None:
+            out["schedule_sensitivity"] = [_plain(r) for r in m.sensitivity]
+        if self.comparison is not None:
+            out["comparison"] = [_plain(r) for r in self.comparison]
+        return out
+
+
+def _plain(row) -> dict:
+    """A dataclass row as plain values (numpy scalars as Python numbers)."""
+    return {k: v.item() if hasattr(v, "item") else v for k, v in asdict(row).items()}
+
+
+def run_swingup(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, plan: SwingupPlan,
+                comparing=None) -> SwingupReport:
+    """Design and patch the spec, pump its pendulum up, hand off and hold on the bench.
+
+    Parameters
+    ----------
+    spec, machine, bench : DesignSpec, MachineProfile, BenchProfile
+        The inputs, resolved and checked.
+    plan : SwingupPlan
+        Strategy, force limit, hold, seed, comparison.
+    comparing : callable, optional
+        A context manager factory wrapped around the comparison (a progress note while it runs).
+
+    Returns
+    -------
+    SwingupReport
+        The manoeuvre and, when asked, the strategies compared.
+    """
+    d = design_on(spec, machine, bench)
+    net = build_patch(d, machine)
+    plant = plant_params(d.spec)
+    force = plan.force_limit_N or bench.actuator.force_limit_N
+    m = manoeuvre(net, plant, bench, machine, d.K[:, :4], plan.strategy, force, plan.hold_s, plan.seed)
+    comparison = None
+    if plan.compare:
+        if comparing is None:
+            comparison = tuple(compare_strategies(plant, force, d.K[:, :4], m.zone))
+        else:
+            with comparing():
+                comparison = tuple(compare_strategies(plant, force, d.K[:, :4], m.zone))
+    return SwingupReport(d, net, plant, plan, force, m, comparison)

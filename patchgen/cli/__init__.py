@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import ast
 import importlib
 import os
 import sys
+from pathlib import Path
 
 import click
 
@@ -20,28 +22,17 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 COMMANDS = ("design", "patch", "check", "simulate", "spice", "recommend", "swingup", "sweep", "identify",
             "bench-test", "examples")
 
-# The first sentence of each command's docstring, for `patchgen --help` without importing every
-# command (and so numpy, scipy, numba, matplotlib). tests/cli/test_cli_imports.py keeps them in step.
-SUMMARIES = {
-    "design": "Compute the LQR gain, Kalman estimator, loop transfer recovery and loop margins of SPEC.",
-    "patch": "Scale SPEC's gains, allocate the machine and write the patch: netlist.json, pots.csv, "
-             "patch-sheet.html, patch-sheet.md (with the bench prediction) and wiring.svg.",
-    "check": "Compare a filled static check with SPEC's patch and name the likeliest wrong pot, cord or sign.",
-    "simulate": "Simulate SPEC's patched circuit (built from its netlist) on the bench.",
-    "spice": "Export SPEC's patch and the bench as an ngspice deck, run it, and compare with patchgen's own "
-             "simulation of the same scenario.",
-    "recommend": "Run every realisation of SPEC on the bench in every scenario; write the best patch and its spec.",
-    "swingup": "Pump SPEC's pendulum up from hanging at rest, hand it to the patched controller when the state "
-               "enters the zone of the linear design, and hold it on the bench (actuator lag and dead zone, "
-               "noise, drift).",
-    "sweep": "Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2): the gains, the "
-             "margins, the pots that would change, and how the nominal patch (as wired) does on that plant.",
-    "identify": "Fit a bench profile and the plant's friction and length to recordings of the standard tests.",
-    "bench-test": "Record every standard bench test of SPEC's plant on its bench (noise and random forces as the "
-                  "profile says), for practice and to check identify against known values.",
-    "examples": "Copy the shipped designs (DIR/designs), scenarios (DIR/sims) and machine and bench profiles "
-                "(DIR/machines, DIR/benches) into DIR, to edit and run by path.",
-}
+def command_help(name: str) -> str:
+    """A command's help as its own docstring says it, read from its module's source without
+    importing it (so `patchgen --help` loads neither numpy nor the simulator, and no copy of the
+    docstrings is kept by hand)."""
+    source = Path(__file__).with_name(f"{name.replace('-', '_')}.py").read_text(encoding="utf-8")
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.FunctionDef) and any(
+                isinstance(d, ast.Call) and d.args and isinstance(d.args[0], ast.Constant) and d.args[0].value == name
+                for d in node.decorator_list):
+            return ast.get_docstring(node) or ""
+    return ""
 
 
 class _Group(click.Group):
@@ -57,10 +48,10 @@ class _Group(click.Group):
         return super().get_command(ctx, name)
 
     def format_commands(self, ctx, formatter):
-        """The command list from SUMMARIES, as click would write it from the loaded commands."""
+        """The command list from the commands' docstrings, as click would write it from the loaded commands."""
         names = self.list_commands(ctx)
         limit = formatter.width - 6 - max(len(n) for n in names)
-        cmds = [self.commands.get(n) or click.Command(n, help=SUMMARIES[n]) for n in names]
+        cmds = [self.commands.get(n) or click.Command(n, help=command_help(n)) for n in names]
         rows = [(n, c.get_short_help_str(limit)) for n, c in zip(names, cmds)]
         with formatter.section("Commands"):
             formatter.write_dl(rows)

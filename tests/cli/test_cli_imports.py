@@ -1,6 +1,6 @@
-"""What each command loads: `patchgen --help` and --version no command (the list comes from
-SUMMARIES, kept equal to what click would write from the commands themselves), a design neither
-the simulator nor the plotting and drawing libraries."""
+"""What each command loads: `patchgen --help` and --version no command (the list comes from each
+command's docstring read from its source, equal to what click would write from the commands
+themselves), a design neither the simulator nor the plotting and drawing libraries."""
 
 import subprocess
 import sys
@@ -8,7 +8,7 @@ import sys
 import click
 import pytest
 
-from patchgen.cli import COMMANDS, SUMMARIES, cli
+from patchgen.cli import COMMANDS, cli, command_help
 
 HEAVY = ("numpy", "scipy", "numba", "matplotlib", "schemdraw", "pydantic", "rich", "jinja2", "control")
 
@@ -17,7 +17,7 @@ HEAVY = ("numpy", "scipy", "numba", "matplotlib", "schemdraw", "pydantic", "rich
 def test_summary_is_the_commands_own_short_help(name):
     cmd = cli.get_command(click.Context(cli), name)
     for limit in range(20, 400, 7):
-        assert click.Command(name, help=SUMMARIES[name]).get_short_help_str(limit) == cmd.get_short_help_str(limit)
+        assert click.Command(name, help=command_help(name)).get_short_help_str(limit) == cmd.get_short_help_str(limit)
 
 
 def loaded(*args, cwd=None) -> tuple[str, set[str]]:

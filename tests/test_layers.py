@@ -26,20 +26,20 @@ import patchgen
 
 PKG = Path(patchgen.__file__).parent
 
-DEPENDS = {  # each folder's direct foundations (render above the simulator; to rise above the studies next)
+DEPENDS = {  # each folder's direct foundations: data below, presentation (render) on top
     "plant": (),
     "inputs": ("plant",),
     "profiles": ("inputs",),
     "design": ("profiles",),
     "patch": ("design",),
     "bench": ("patch",),
-    "render": ("bench",),
-    "identify": ("render",),
-    "spice": ("render",),
-    "swingup": ("render",),
-    "studies": ("render",),
+    "identify": ("bench",),
+    "spice": ("bench",),
+    "swingup": ("bench",),
+    "studies": ("bench",),
     "pipeline": ("identify", "spice", "swingup", "studies"),
-    "cli": ("pipeline",),
+    "render": ("pipeline",),
+    "cli": ("render",),
 }
 LAZY = patchgen._LAZY  # the root package's lazily exported names -> their modules
 

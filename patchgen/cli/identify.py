@@ -29,11 +29,11 @@ def identify_cmd(recordings, out_dir, base, bench_id, name, as_json, force) -> N
     bench = "DIR/bench.toml"), DIR/plant.toml (a [plant] table for a spec), DIR/report.md,
     DIR/report.json and a fit plot per recording.
     """
-    from patchgen.identify.files import FIXED, identify_files
     from patchgen.identify.identify import identify
     from patchgen.identify.recording import expand
     from patchgen.inputs.errors import InputError
     from patchgen.profiles.bench import load_bench
+    from patchgen.render.identify_files import FIXED, identify_files
     from patchgen.render.outputs import check_out_dir, write_files
 
     if not bench_id.strip():

@@ -8,10 +8,10 @@ from rich.console import Console
 from patchgen.bench.diagnosis import as_patched_on_bench
 from patchgen.design.lqg import design_on
 from patchgen.patch.build import build_patch
+from patchgen.render.bench_sheet import HOLD_RUNS, predicted_patch_files
 from patchgen.render.outputs import check_out_dir, json_text, write_files
 from patchgen.render.patchfiles import PATCH_FILES, patch_files
 from patchgen.render.pottable import pot_rows, pot_table
-from patchgen.studies.bench_sheet import HOLD_RUNS, predicted_patch_files
 
 from . import cli
 from .inputs import load_inputs

@@ -16,7 +16,7 @@ from patchgen.profiles.bench import bench_scenarios
 from patchgen.render.outputs import check_out_dir, write_files
 from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.pottable import pot_table
-from patchgen.studies.comparison import (
+from patchgen.render.recommendation_files import (
     RECOMMENDED_SPEC,
     corner_cell,
     fmt_figure,

@@ -18,7 +18,8 @@ from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, json_text, write_files
-from patchgen.spice.compare import compare, comparison_plot
+from patchgen.render.spice_plot import comparison_plot
+from patchgen.spice.compare import compare
 from patchgen.spice.deck import OPAMP_MODEL, SpiceSettings, spice_deck
 from patchgen.spice.run import NgspiceError, NgspiceMissing, run_ngspice
 

@@ -8,12 +8,13 @@ from rich.table import Table
 
 from patchgen.pipeline.swingup import SwingupPlan, run_swingup
 from patchgen.render import plot_helper
+from patchgen.render.bench_sheet import predicted_patch_files
+from patchgen.render.manoeuvre_plot import plot_manoeuvre
 from patchgen.render.outputs import check_out_dir, json_text, write_files
 from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.sheet import SheetSection
-from patchgen.studies.bench_sheet import predicted_patch_files
-from patchgen.swingup.manoeuvre import BENCH_HOLD_S, plot_manoeuvre
-from patchgen.swingup.output import compact_schedule_rows, output_files, patch_sheet_rows
+from patchgen.render.swingup_files import compact_schedule_rows, output_files, patch_sheet_rows
+from patchgen.swingup.manoeuvre import BENCH_HOLD_S
 from patchgen.swingup.strategies import STRATEGIES
 
 from . import cli

@@ -19,7 +19,8 @@ from patchgen.patch.netlist import Netlist, read_netlist
 from patchgen.plant.equations import PlantParams, nonlinear_rhs
 from patchgen.profiles.bench import BenchProfile, load_bench
 from patchgen.profiles.machine import load_machine
-from patchgen.spice.compare import compare, comparison_plot
+from patchgen.render.spice_plot import comparison_plot
+from patchgen.spice.compare import compare
 from patchgen.spice.deck import SpiceSettings, spice_deck
 from patchgen.spice.elements import loaded_ratio, pot_wiper_position
 from patchgen.spice.run import NgspiceError, NgspiceMissing, run_ngspice

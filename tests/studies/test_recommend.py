@@ -21,7 +21,7 @@ from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import read_netlist
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
-from patchgen.studies.comparison import table_rows
+from patchgen.render.recommendation_files import table_rows
 from patchgen.studies.recommend import Candidate, Recommendation, recommend
 from tests.conftest import ROOT, design_path
 from tests.patch.test_patch_roundtrip import check_roundtrip

@@ -151,9 +151,9 @@ def test_the_settled_spec_fixes_what_the_design_chose_and_the_units():
 def test_none_chosen_names_the_worst_corner_when_the_drawn_runs_held():
     """A realisation that held in 97 % of the runs drawn over the bench's ranges but in none at a
     corner is refused for the corner, and the verdict says so (not that 97 % is too few)."""
+    from patchgen.render.recommendation_files import verdict_text
     from patchgen.studies.bench_corners import BenchStudy, CornerOutcome
     from patchgen.studies.candidate import Candidate, Recommendation
-    from patchgen.studies.comparison import verdict_text
     from patchgen.studies.ranking import ScenarioOutcome
 
     held = ScenarioOutcome("hold-120s", 200, 194, 0, 6, 0, 1.0)

@@ -7,8 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from patchgen.plant.equations import PlantParams
+from patchgen.render.swingup_files import output_files, patch_sheet_rows
 from patchgen.swingup.handoff import Zone, default_spread, estimate_zone, lqr_zone, lyapunov_matrix
-from patchgen.swingup.output import output_files, patch_sheet_rows
 from patchgen.swingup.pumping import HOLD_S, PUMP_T_MAX_S, STEP_S, simulate
 from patchgen.swingup.run import swing_up
 from patchgen.swingup.schedule import optimise_schedule, replay, schedule_from_result

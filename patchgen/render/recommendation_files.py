@@ -10,9 +10,9 @@ from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.spec_file import spec_toml
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.render.bench_sheet import predicted_patch_files
 from patchgen.render.outputs import json_text
 from patchgen.render.sheet import SheetSection
-from patchgen.studies.bench_sheet import predicted_patch_files
 from patchgen.studies.candidate import Candidate, Recommendation
 from patchgen.studies.departures import grouped, value_text
 from patchgen.studies.ranking import ROUND_RUNS, TARGET

@@ -5,10 +5,10 @@ plot per recording."""
 from __future__ import annotations
 
 from patchgen.identify.identify import Identification
-from patchgen.identify.plots import fit_plot, plot_name
 from patchgen.identify.profile import bench_toml, plant_toml
-from patchgen.identify.report import report_json, report_markdown
 from patchgen.profiles.bench import BenchProfile
+from patchgen.render.identify_plots import fit_plot, plot_name
+from patchgen.render.identify_report import report_json, report_markdown
 
 FIXED = ("bench.toml", "plant.toml", "report.md", "report.json")
 

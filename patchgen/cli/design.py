@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import click
-from rich.console import Console
 
 from patchgen.design.lqg import Design, design_on
 from patchgen.design.report import design_dict
@@ -31,4 +30,4 @@ def design_cmd(spec: str, as_json: bool) -> None:
     if as_json:
         click.echo(json_text(design_dict(d)), nl=False)
     else:
-        print_design(d, Console())
+        print_design(d)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import click
-from rich.console import Console
 
 from patchgen.bench.diagnosis import as_patched_on_bench
 from patchgen.design.lqg import design_on
@@ -11,7 +10,7 @@ from patchgen.patch.build import build_patch
 from patchgen.render.bench_sheet import HOLD_RUNS, predicted_patch_files
 from patchgen.render.outputs import check_out_dir, json_text, write_files
 from patchgen.render.patchfiles import PATCH_FILES, patch_files
-from patchgen.render.pottable import pot_rows, pot_table
+from patchgen.render.pottable import pot_rows, print_patch
 
 from . import cli
 from .inputs import load_inputs
@@ -45,8 +44,4 @@ def patch_cmd(spec: str, out_dir: str, force: bool, runs_hold: int, no_predict: 
                               "notes": net.notes, "margins": judged.as_dict(),
                               "written": [str(p) for p in written]}), nl=False)
         return
-    console = Console()
-    console.print(pot_table(net, machine.procedure.pot_setting))
-    for n in net.notes:
-        console.print(f"[yellow]note:[/yellow] {n}")
-    console.print("wrote " + ", ".join(str(p) for p in written))
+    print_patch(net, machine, written)

@@ -49,8 +49,9 @@ def margins_table(rows: list[tuple[str, Margins | None]], title: str = "Loop mar
     return t
 
 
-def print_design(d: Design, console: Console) -> None:
+def print_design(d: Design, console: Console | None = None) -> None:
     """The design report on the terminal: gains, poles, zeros, estimator, margins."""
+    console = console or Console()
     spec = d.spec
     console.print(f"[bold]{spec.name}[/bold]  {spec.description}")
     if spec.source:

@@ -5,12 +5,23 @@ from __future__ import annotations
 import csv
 import io
 
+from rich.console import Console
 from rich.table import Table
 
 from patchgen.patch.netlist import Netlist
-from patchgen.profiles.machine import the_machine
+from patchgen.profiles.machine import MachineProfile, the_machine
 
 COLUMNS = ("pot", "setting", "signal", "amplifier", "input", "weight", "coefficient", "realized", "error_pct", "note")
+
+
+def print_patch(net: Netlist, machine: MachineProfile, written: list, console: Console | None = None) -> None:
+    """The patch on the terminal: its pot table (set as the machine's procedure says), its notes,
+    and the files written."""
+    console = console or Console()
+    console.print(pot_table(net, machine.procedure.pot_setting))
+    for n in net.notes:
+        console.print(f"[yellow]note:[/yellow] {n}")
+    console.print("wrote " + ", ".join(str(p) for p in written))
 
 
 def pot_rows(net: Netlist) -> list[dict]:

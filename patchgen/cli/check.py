@@ -6,9 +6,6 @@ from __future__ import annotations
 import sys
 
 import click
-from rich.console import Console
-from rich.markup import escape
-from rich.table import Table
 
 from patchgen.design.lqg import design_on
 from patchgen.inputs.errors import InputError
@@ -16,6 +13,7 @@ from patchgen.patch.build import build_patch
 from patchgen.patch.fault_finding import diagnose_readings
 from patchgen.patch.readings import load_readings
 from patchgen.patch.static_check import static_check
+from patchgen.render.check_view import print_verdict
 from patchgen.render.outputs import json_text
 
 from . import cli
@@ -49,21 +47,6 @@ def check_cmd(spec: str, readings_path: str, as_json: bool) -> None:
                         "explained": f.explained, "of": f.of, "consistent": f.consistent} for f in verdict.faults]}),
             nl=False)
     else:
-        console = Console()
-        if verdict.agree:
-            console.print(f"[green]all {len(check.readings)} readings agree[/green] with {net.design}'s patch "
-                          "within their tolerances")
-        else:
-            console.print(f"[red]{len(verdict.mismatched)} of {len(check.readings)} readings disagree[/red]: "
-                          + escape(", ".join(verdict.mismatched)))
-            t = Table(title="Likeliest faults (one at a time), best first", title_justify="left")
-            for col in ("rank", "fault", "explains", "chi-square"):
-                t.add_column(col, justify="left" if col == "fault" else "right")
-            for k, f in enumerate(verdict.faults, 1):
-                t.add_row(str(k), escape(f.description), f"{f.explained} of {f.of}", f"{f.score:.3g}")
-            console.print(t)
-            if sum(f.consistent for f in verdict.faults) > 1:
-                console.print("[yellow]more than one fault explains every reading:[/yellow] the static check cannot "
-                              "tell them apart; check each in turn")
+        print_verdict(net, check, verdict)
     if not verdict.agree:
         sys.exit(DISAGREE_STATUS)

@@ -1,0 +1,95 @@
+"""patchgen swingup's files and terminal view, from the pipeline's report: the patch with its
+pump-up schedule on the sheet, the pump-up's and the manoeuvre's plots, manoeuvre.json; the
+switching table, the hand-off and the hold, the schedule's sensitivity and the strategies compared."""
+
+from __future__ import annotations
+
+from rich.console import Console
+from rich.table import Table
+
+from patchgen.pipeline.swingup import SwingupReport
+from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
+from patchgen.render import plot_helper
+from patchgen.render.bench_sheet import predicted_patch_files
+from patchgen.render.manoeuvre_plot import plot_manoeuvre
+from patchgen.render.outputs import json_text
+from patchgen.render.sheet import SheetSection
+from patchgen.render.swingup_files import compact_schedule_rows, output_files, patch_sheet_rows
+
+
+def swingup_files(report: SwingupReport, machine: MachineProfile, bench: BenchProfile, svg: bool,
+                  hold_runs: int) -> dict[str, bytes | str]:
+    """Every file of the command: the patch and its sheet with the pump-up schedule (the sheet's
+    hold predicted over ``hold_runs`` seeds), the plots, and manoeuvre.json (the report's summary)."""
+    d, m, F, strategy = report.design, report.manoeuvre, report.force_limit_N, report.plan.strategy
+    p = m.pump
+    section = SheetSection(f"Pump-up schedule ({strategy}, {F:g} N)", *compact_schedule_rows(p),
+                           "Switch times for the operator or a sequencer, from hanging at rest; hand off (IC -> OP) "
+                           "when the pendulum is in the zone. Computed for this design's plant model: an open-loop "
+                           "schedule is fragile, the supervisory logic re-times itself on the measured states.")
+    title = (f"{d.spec.name}: {strategy} pump-up, hand-off at {p.handoff_time or float('nan'):.2f} s, "
+             "patched hold")
+    job = plot_helper.submit(pump_and_manoeuvre_files, p, m, title, svg)
+    files = predicted_patch_files(d, machine, bench, report.netlist, [section], runs_hold=hold_runs)
+    files.update(job.result())
+    files["manoeuvre.json"] = json_text(report.summary())
+    return files
+
+
+def pump_and_manoeuvre_files(p, m, title: str, svg: bool) -> dict[str, bytes]:
+    """The pump-up's files and the manoeuvre plot, as file name -> bytes (drawn by the plot helper)."""
+    return {**output_files(p, svg=svg), **plot_manoeuvre(m, "manoeuvre", title, svg)}
+
+
+def comparing():
+    """A note on stderr while the strategies are compared (it takes about a minute)."""
+    return Console(stderr=True).status("comparing the three strategies on the nominal and +/-10% plants")
+
+
+def print_swingup(report: SwingupReport, written: list, console: Console | None = None) -> None:
+    """The report on the terminal."""
+    console = console or Console()
+    m, F, strategy, plant = report.manoeuvre, report.force_limit_N, report.plan.strategy, report.plant
+    hold_s, comparison, p = report.plan.hold_s, report.comparison, report.manoeuvre.pump
+    rows = patch_sheet_rows(p)
+    t = Table(title=f"Switching table: {strategy}, {F:g} N", title_justify="left")
+    for c in rows[0]:
+        t.add_column(c)
+    for r in rows[1:]:
+        t.add_row(*r)
+    console.print(t)
+    if p.reached:
+        console.print(f"hand-off zone reached at {p.handoff_time:.2f} s, max |s| during pump-up "
+                      f"{p.max_abs_s_pump:.3f} m (switches at +/-{plant.d / 2:.3f} m)")
+        h = m.hold.runs[0]
+        console.print(("[green]" if m.held else "[red]") + f"patched controller on the bench for {hold_s:g} s: "
+                      + ("held" if m.held else "lost it") + f" (max |theta| {h.max_abs_theta_deg:.2f} deg, "
+                      f"max |s| {h.max_abs_s_m:.3f} m)" + ("[/green]" if m.held else "[/red]"))
+    else:
+        console.print("[red]the hand-off zone was not reached[/red]")
+    if m.sensitivity:
+        s = Table(title="The open-loop schedule replayed on plants with one parameter off by 10%",
+                  title_justify="left")
+        for col in ("parameter", "factor", "reaches the zone", "at (s)", "max |s| (m)", "on the track"):
+            s.add_column(col, justify="left" if col == "parameter" else "right")
+        for r in m.sensitivity:
+            s.add_row(r.parameter, f"{r.factor:.2f}", "yes" if r.reached else "no", _num(r.time_to_zone_s, "{:.3f}"),
+                      f"{r.max_abs_s_m:.3f}", "yes" if r.on_track else "no")
+        console.print(s)
+    if comparison:
+        c = Table(title=f"Strategies compared ({F:g} N, zone of the patched controller; success on the "
+                  "10 plants with one parameter off by +/-10%)", title_justify="left")
+        for col in ("strategy", "time to zone (s)", "max |s| (m)", "E/E0 at hand-off", "held (state feedback)",
+                    "robust", "worst time (s)"):
+            c.add_column(col, justify="left" if col == "strategy" else "right")
+        for r in comparison:
+            c.add_row(r.strategy, _num(r.time_to_zone_s, "{:.3f}"), f"{r.max_abs_s_m:.3f}",
+                      _num(r.energy_ratio, "{:.3f}"), "yes" if r.held else "no",
+                      f"{r.robust_reached}/{r.robust_total}", _num(r.worst_time_s, "{:.2f}"))
+        console.print(c)
+    console.print("wrote " + ", ".join(str(x) for x in written))
+
+
+def _num(x, fmt: str) -> str:
+    return "-" if x is None else fmt.format(x)

@@ -1,0 +1,114 @@
+"""patchgen spice as two functions: the deck of the spec's patch on its bench (written even where
+ngspice is missing), then ngspice's run compared with patchgen's own simulation of the same
+scenario, into a report whose ``summary()`` is comparison.json and ``--json``."""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from patchgen.bench.noise_drift import noise_and_drift
+from patchgen.bench.simulate import simulate
+from patchgen.design.lqg import Design, design_on
+from patchgen.design.model import plant_params
+from patchgen.inputs.scenario import Scenario
+from patchgen.inputs.spec import DesignSpec
+from patchgen.patch.build import build_patch
+from patchgen.patch.netlist import Netlist
+from patchgen.plant.equations import PlantParams
+from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.machine import MachineProfile
+from patchgen.spice.compare import Comparison, compare
+from patchgen.spice.deck import OPAMP_MODEL, SpiceDeck, SpiceSettings, spice_deck
+from patchgen.spice.run import run_ngspice
+
+RECORD_EVERY_STEP_S = 1e-6  # a history interval below any engine step: the reference at every step
+
+
+@dataclass(frozen=True)
+class SpicePlan:
+    """Ideal (noise, drift off, the actuator a pure gain) or the bench's; the transient's output
+    step (s); the agreement required, as a fraction of each signal's peak."""
+
+    ideal: bool = False
+    step_s: float = 0.005
+    tolerance: float = 0.01
+
+
+@dataclass(frozen=True)
+class SpiceJob:
+    """The deck of a patch on its bench, and what the comparison needs to run after it."""
+
+    design: Design
+    netlist: Netlist
+    plant: PlantParams
+    bench: BenchProfile
+    machine: MachineProfile
+    scenario: Scenario
+    plan: SpicePlan
+    deck: SpiceDeck
+
+
+@dataclass(frozen=True)
+class SpiceReport:
+    """ngspice's run against patchgen's: the comparison, ngspice's run time and its data file."""
+
+    job: SpiceJob
+    comparison: Comparison
+    run_time_s: float
+    data: bytes | None
+
+    def summary(self) -> dict:
+        """Every figure and the verdict, as plain JSON-able data (comparison.json, --json)."""
+        cmp, plan = self.comparison, self.job.plan
+        return {"design": self.job.design.spec.name, "scenario": self.job.scenario.name, "ideal": plan.ideal,
+                "tolerance": plan.tolerance, "ngspice_run_time_s": self.run_time_s,
+                "compared_at": f"ngspice's {len(cmp.t)} time points", "opamp_model": OPAMP_MODEL,
+                "statistical": not plan.ideal,
+                "signals": {k: {"rms_rel": v.rms_rel, "max_rel": v.max_rel, "peak": v.peak}
+                            for k, v in cmp.signals.items()},
+                "agrees": cmp.agrees(plan.tolerance)}
+
+
+class _Own:
+    """patchgen's own run as a trajectory (t and named signals, SI and volts)."""
+
+    def __init__(self, history: dict[str, np.ndarray]):
+        self.t = history["t"]
+        self.signals = {k: v for k, v in history.items() if k != "t"}
+
+
+def spice_job(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenario: Scenario,
+              plan: SpicePlan) -> SpiceJob:
+    """Design and patch the spec, and write its deck for the scenario (SPICE settings from the
+    profiles or, ideal, with noise and drift off and the actuator a pure gain)."""
+    d = design_on(spec, machine, bench)
+    net = build_patch(d, machine)
+    plant = plant_params(d.spec)
+    levels = noise_and_drift([s.id for s in net.sensors], bench, machine, scenario, plan.ideal)
+    settings = SpiceSettings(duration_s=scenario.duration_s, step_s=plan.step_s,
+                             x0=tuple(scenario.initial.vector()), noise_and_drift=levels,
+                             actuator="ideal" if plan.ideal else "bench", seed=scenario.seed,
+                             disturbances=tuple(scenario.on_pendulum(plant).disturbances))
+    return SpiceJob(d, net, plant, bench, machine, scenario, plan, spice_deck(net, plant, bench, machine, settings))
+
+
+def run_spice(job: SpiceJob) -> SpiceReport:
+    """Run the deck in ngspice and compare with patchgen's own run at every step of its
+    integrator, evaluated at ngspice's time points.
+
+    Raises
+    ------
+    patchgen.spice.run.NgspiceMissing, patchgen.spice.run.NgspiceError
+        Without ngspice, or when it fails (the deck is still worth writing).
+    """
+    with tempfile.TemporaryDirectory() as tmp:
+        result = run_ngspice(job.deck, tmp)
+        path = Path(tmp, "patch.data")
+        data = path.read_bytes() if path.exists() else None
+    every_step = job.scenario.model_copy(update={"record_dt_s": RECORD_EVERY_STEP_S})
+    own = simulate(job.netlist, job.plant, job.bench, job.machine, every_step, ideal=job.plan.ideal)
+    return SpiceReport(job, compare(result, _Own(own.history)), result.run_time_s, data)

@@ -6,27 +6,16 @@ from __future__ import annotations
 import sys
 
 import click
-from rich.console import Console
-from rich.markup import escape
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
 from patchgen.bench.prediction import STANDARD
 from patchgen.profiles.bench import bench_scenarios
 from patchgen.render.outputs import check_out_dir, write_files
 from patchgen.render.patchfiles import PATCH_FILES
-from patchgen.render.pottable import pot_table
+from patchgen.render.recommend_view import print_recommendation, progress_bar
 from patchgen.render.recommendation_files import (
     RECOMMENDED_SPEC,
-    corner_cell,
-    fmt_figure,
-    gm_cell,
-    held_cell,
     recommendation_files,
-    table_rows,
-    verdict_text,
 )
-from patchgen.studies.departures import grouped
 from patchgen.studies.recommend import RUNS, recommend
 
 from . import cli
@@ -69,55 +58,14 @@ def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_nam
     if bench_name is not None:
         sp = sp.model_copy(update={"bench": bench_name})
     scenarios = tuple(scenario_for(p, sp, runs).judged() for p in (scenario_paths or bench_scenarios(bench)))
-    console = Console(stderr=as_json)
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  console=Console(stderr=True), transient=True) as bar:
-        task = bar.add_task("Monte Carlo", total=None)
-        rec = recommend(sp, machine, bench, scenarios, runs, seed, early_stop=not all_runs,
-                        progress=lambda label, done, total: bar.update(
-                            task, description=f"Monte Carlo: {label}", completed=done, total=total))
+    with progress_bar() as progress:
+        rec = recommend(sp, machine, bench, scenarios, runs, seed, early_stop=not all_runs, progress=progress)
     best = rec.best
     files = recommendation_files(rec, machine, bench)
     written = write_files(out_dir, files, force=force)
     if as_json:
         click.echo(files["recommendation.json"], nl=False)
     else:
-        _print_table(console, rec, sp.name, runs)
-        if best is not None:
-            console.print(pot_table(best.netlist, machine.procedure.pot_setting))
-            for n in best.netlist.notes:
-                console.print(f"[yellow]note:[/yellow] {n}")
-        console.print(("[bold]" if best else "[bold red]") + escape(verdict_text(rec)) + "[/]")
-        if best is not None and best.departures:
-            console.print(f"[bold yellow]departs from {escape(sp.name)}:[/bold yellow]")
-            for line in grouped(best.departures):
-                console.print(f"  {escape(line)}")
-        console.print("wrote " + ", ".join(str(p) for p in written))
+        print_recommendation(rec, machine, sp.name, runs, written)
     if best is None:
         sys.exit(NONE_CHOSEN_STATUS)
-
-
-def _print_table(console: Console, rec, name: str, runs: int) -> None:
-    """The ranked comparison as a terminal table."""
-    t = Table(title=f"{name}: realisations on the bench ({', '.join(sc.name for sc in rec.scenarios)}; "
-              f"up to {runs} seeds each)", title_justify="left")
-    cols = ["rank", "realisation", "estimator", "loop on bench", "verdict", "held: weakest scenario [95 %]",
-            "GM lo/up dB", "PM", "swing V", "amps/pots"]
-    if rec.ranges:
-        cols.insert(6, "worst corner of the ranges")
-    for col in cols:
-        left = col in ("realisation", "estimator", "verdict", "loop on bench")
-        t.add_column(col, justify="left" if left else "right")
-    for r in table_rows(rec):
-        if r["error"]:
-            t.add_row("-", r["realisation"], r["estimator"], "", f"[red]{escape(r['error'])}[/red]",
-                      *[""] * (len(cols) - 5))
-            continue
-        loop = r["bench_loop"] if r["bench_loop"] == "stable" else f"[red]{r['bench_loop']}[/red]"
-        verdict = {"holds": "[green]holds[/green]", "fails": "[red]fails[/red]"}.get(r["decision"], r["decision"])
-        cells = [str(r["rank"]), r["realisation"], r["estimator"], loop, verdict, held_cell(r), gm_cell(r, "/"),
-                 fmt_figure(r["pm_deg"], "{:.1f}"), f"{r['worst_swing_V']:.2f}", f"{r['amplifiers']}/{r['pots']}"]
-        if rec.ranges:
-            cells.insert(6, escape(corner_cell(r)))
-        t.add_row(*cells)
-    Console(width=max(160, console.width), stderr=console.stderr).print(t)

@@ -52,6 +52,8 @@ class SwingupReport:
                "hold_s": self.plan.hold_s, "held": m.held,
                "hold": None if m.hold is None else {k: v for k, v in m.hold.summary()["first_run"].items()
                                                     if k != "final_state"}}
+        out["switching_table"] = [{k: v.item() if hasattr(v, "item") else v for k, v in row.items()}
+                                  for row in p.table_rows()]  # the switching table the command prints
         if m.sensitivity is not None:
             out["schedule_sensitivity"] = [_plain(r) for r in m.sensitivity]
         if self.comparison is not None:

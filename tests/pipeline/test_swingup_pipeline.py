@@ -20,6 +20,7 @@ def test_the_report_holds_the_manoeuvre_and_its_verdicts():
     assert s["reached_zone"] == m.pump.reached and s["held"] == m.held and s["hold_s"] == 5.0
     assert s["force_limit_N"] == load_bench(spec.bench).actuator.force_limit_N  # the bench's, unless given
     assert s["track_half_m"] == spec.plant.d / 2 and "comparison" not in s
+    assert s["switching_table"] == m.pump.table_rows() and s["switching_table"][-1]["phase"] is None  # hand-off
 
 
 def test_manoeuvre_json_is_the_printed_json(tmp_path):

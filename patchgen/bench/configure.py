@@ -219,8 +219,7 @@ def _sensors(circuit: Circuit, bench: BenchProfile, ideal: bool) -> Sensors:
     filt = [order.index(q) if q in filters else -1 for q in qs]
     source = [PLANT_STATES.index(POSITION_OF[q]) if q in filters else -1 for q in qs]
     return Sensors(state=_i64(circuit.sensor_state), gain=_f64(circuit.sensor_gain),
-                   quantum=_f64([quanta.get(POSITION_OF.get(q, q), 0.0) if q in filters else quanta.get(q, 0.0)
-                                 for q in qs]),
+                   quantum=_f64([quanta.get(POSITION_OF[q] if q in filters else q, 0.0) for q in qs]),
                    filt=_i64(filt), source=_i64(source),
                    wn=_f64([filters[q].wn_rad_s if q in filters else 0.0 for q in qs]),
                    zeta=_f64([filters[q].zeta if q in filters else 0.0 for q in qs]))

@@ -21,7 +21,6 @@ ACTUATOR_MODELS = Literal["gain", "lag", "lag_zero", "dc_motor"]
 LAG_MODELS = ("lag", "lag_zero")  # the models whose force is a state (the design's "actuator")
 DERIVED_TOL = 1e-9  # relative: a derived figure written back (a dumped profile read again) must agree to this
 _REQUIRED = tuple(p.name for p in MOTOR_PARAMETERS if p.default is None)
-_DEFAULTS = {p.name: p.default for p in MOTOR_PARAMETERS if p.default is not None}
 
 
 def _motor_field(value, info: ValidationInfo):
@@ -50,13 +49,17 @@ DriveFields = create_model(
 )
 
 
+def _motor(figures: dict, inductance: float | None = None) -> DCMotor:
+    """A DCMotor from an [actuator] table's figures by name, a default for each one not given."""
+    return DCMotor(**{p.name: (p.default if figures.get(p.name) is None else figures[p.name])
+                      for p in MOTOR_PARAMETERS}, L_m=inductance or 0.0)
+
+
 def motor_of(section) -> DCMotor | None:
     """The DCMotor a validated [actuator] table states, defaults filled in; None for other models."""
     if section.model != "dc_motor":
         return None
-    figures = {p.name: getattr(section, p.name) for p in MOTOR_PARAMETERS}
-    return DCMotor(**{k: (_DEFAULTS[k] if v is None else v) for k, v in figures.items()},
-                   L_m=getattr(section, "L_m", None) or 0.0)
+    return _motor({p.name: getattr(section, p.name) for p in MOTOR_PARAMETERS}, getattr(section, "L_m", None))
 
 
 def amp_gain_of(section) -> float:
@@ -64,17 +67,14 @@ def amp_gain_of(section) -> float:
     return 1.0 if section.amp_gain is None else section.amp_gain
 
 
-def derived(value, info: ValidationInfo, name: str, what: str, of) -> float | None:
-    """A figure that follows from the motor for a dc_motor (``of(motor, data)``): taken from it
-    when not given, refused when given otherwise; for other models the value as given."""
+def derived(value, info: ValidationInfo, what: str, of) -> float | None:
+    """A figure that follows from the motor for a dc_motor (``of(motor)``): taken from it when not
+    given, refused when given otherwise; for other models the value as given."""
     if info.data.get("model") != "dc_motor":
         return value
     if any(info.data.get(k) is None for k in _REQUIRED):
         return value  # the missing figure is reported on its own
-    data = info.data
-    motor = DCMotor(**{p.name: (data[p.name] if data.get(p.name) is not None else p.default)
-                       for p in MOTOR_PARAMETERS})
-    want = of(motor, data)
+    want = of(_motor(info.data))
     if value is not None and not math.isclose(value, want, rel_tol=DERIVED_TOL):
         raise ValueError(f"follows from the motor for a dc_motor ({what} = {want:.6g}): leave it out (got {value:g})")
     return want
@@ -92,5 +92,4 @@ def k_u_of(value, info: ValidationInfo):
             raise ValueError("missing field (force per command volt, N/V)")
         return value
     gain = info.data.get("amp_gain")
-    return derived(value, info, "K_U", "amp_gain x a",
-                   lambda m, d: (1.0 if gain is None else gain) * m.force_per_volt())
+    return derived(value, info, "amp_gain x a", lambda m: (1.0 if gain is None else gain) * m.force_per_volt())

@@ -40,7 +40,7 @@ def _force_limit(value, info):
     v_lim = info.data.get("V_limit")
     if v_lim is None:
         return value
-    return derived(value, info, "force_limit_N", "a x V_limit", lambda m, d: m.force_per_volt() * v_lim)
+    return derived(value, info, "a x V_limit", lambda m: m.force_per_volt() * v_lim)
 
 
 class BenchActuator(DriveFields):

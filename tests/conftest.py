@@ -69,3 +69,13 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
 
 def design_path(name: str) -> Path:
     return DESIGNS / f"{name}.toml"
+
+
+def design_from_path(path):
+    """A spec file's design on the machine and bench it names, as patchgen design makes it, and
+    that machine."""
+    from patchgen.pipeline.design import run_design
+    from patchgen.pipeline.inputs import load_inputs
+
+    inputs = load_inputs(str(path))
+    return run_design(inputs).design, inputs.machine

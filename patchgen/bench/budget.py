@@ -90,7 +90,7 @@ def check(scenario: Scenario, runs: int, *, step: float, stride: int, history: b
         raise InputError(scenario.path, length, f"one run would take {at}; at most {MAX_RUN_STEPS:.0e} steps "
                          "are allowed (see docs/simulation.md)")
     if cost.run_steps > MAX_RUN_STEPS:
-        raise InputError("--runs", "", f"{runs} runs of {at} would take {cost.run_steps:.3g} steps; at most "
+        raise InputError("runs", "", f"{runs} runs of {at} would take {cost.run_steps:.3g} steps; at most "
                          f"{MAX_RUN_STEPS:.0e} are allowed (fewer runs; see docs/simulation.md)")
     if cost.history_samples > MAX_HISTORY_SAMPLES:
         raise InputError(scenario.path, "record_dt_s", f"the history would keep {cost.history_samples:.3g} samples "

@@ -18,7 +18,6 @@ import numpy as np
 from patchgen.bench.bench_linear import actuator_lag, bench_plant
 from patchgen.design.lqg import Design
 from patchgen.design.margins import Margins, loop_margins
-from patchgen.design.model import plant_params
 from patchgen.patch.as_patched import AsPatched, as_patched, figures
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import wired_law
@@ -136,7 +135,7 @@ def as_patched_on_bench(design: Design, net: Netlist, machine: MachineProfile, b
     lag = actuator_lag(bench)
     tag = f"actuator lag {lag:g} s" if lag else "actuator without lag"
     loop = figures(f"{bench.id} bench, linearised ({tag})", "as patched",
-                   *bench_open_loop(net, plant_params(design.spec), bench))
+                   *bench_open_loop(net, design.plant, bench))
     return as_patched(design, net, machine).with_bench(loop)
 
 

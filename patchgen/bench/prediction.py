@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from patchgen.bench.diagnosis import diagnose
 from patchgen.bench.simulate import RunSummary, simulate
 from patchgen.inputs.scenario import load_scenario
 from patchgen.patch.netlist import Netlist
@@ -74,21 +73,3 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
                               r0.fall_time_s, max(x.max_abs_theta_deg for x in summaries),
                               max(x.max_abs_s_m for x in summaries), ", ".join(ovl) or "none"))
     return out
-
-
-def prediction_rows(preds: list[Prediction]) -> tuple[list[str], list[list[str]]]:
-    """The predictions as a table for the patch sheet: (header, rows of text)."""
-    header = ["scenario", "runs", "held", "limit switch (run 0)", "fallen (run 0)", "max |theta| (deg)",
-              "max |s| (m)", "overloads"]
-    rows = []
-    for p in preds:
-        rows.append([p.scenario, str(p.runs), f"{100 * p.fraction_held:.0f} %",
-                     "no" if p.first_trip_s is None else f"at {p.first_trip_s:.2f} s",
-                     "no" if p.first_fall_s is None else f"at {p.first_fall_s:.2f} s",
-                     f"{p.max_theta_deg:.2f}", f"{p.max_s_m:.3f}", p.overloads])
-    return header, rows
-
-
-def diagnosis_note(net: Netlist, plant: PlantParams, bench: BenchProfile) -> str:
-    """The linearised loop's verdicts (see patchgen.bench.diagnosis) as one sentence for the sheet."""
-    return "Linearised: " + "; ".join(lp.line() for lp in diagnose(net, plant, bench)) + "."

@@ -60,7 +60,8 @@ class _Group(click.Group):
         try:
             return super().invoke(ctx)
         except InputError as exc:
-            click.echo(f"patchgen: {_one_line(exc.line())}", err=True)
+            click.echo(f"patchgen: {_one_line(_named_by_option(self.commands.get(ctx.invoked_subcommand), exc))}",
+                       err=True)
             sys.exit(exc.exit_status)
         finally:
             helper = sys.modules.get("patchgen.render.plot_helper")  # only where a command loaded it
@@ -88,6 +89,15 @@ def cli() -> None:
     SPEC is a TOML file or a shipped design by name (bench-recommended,
     thesis-ch5, thesis-case1, ...); --scenario likewise (hold-120s, ...).
     """
+
+
+def _named_by_option(command: click.Command | None, exc: InputError) -> str:
+    """The error's line, a run-plan field it names (``runs``) given as the command's option that
+    set it (``--runs``): the library speaks of its plans, the user of the options they typed."""
+    for p in command.params if command is not None else ():
+        if isinstance(p, click.Option) and p.name == exc.source and not exc.field:
+            return InputError(max(p.opts, key=len), "", exc.message).line()
+    return exc.line()
 
 
 def _one_line(text: str) -> str:

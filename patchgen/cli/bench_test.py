@@ -5,17 +5,18 @@ from __future__ import annotations
 import click
 
 from . import cli
-from .options import SEED, out_option
+from .options import FORCE, json_option, out_option, seed_option
 
 
 @cli.command("bench-test")
 @click.argument("spec")
 @out_option("the recordings (CSV) and test figures (TOML)")
-@click.option("--bench", "bench_name", default=None,
-              help="Bench profile to record on (default: the spec's bench).")
-@click.option("--seed", type=SEED, default=0, show_default=True, help="Noise seed: the same seed, the same bytes.")
-@click.option("--force", is_flag=True, help="Replace output files that already exist.")
-def bench_test_cmd(spec, out_dir, bench_name, seed, force) -> None:
+@click.option("--bench", "bench_name", default=None, metavar="BENCH",
+              help="Bench profile to record on (a shipped id or a TOML file; default: the spec's bench).")
+@seed_option(0, "Noise seed: the same seed, the same bytes.")
+@json_option("the spec, bench, seed and files written")
+@FORCE
+def bench_test_cmd(spec, out_dir, bench_name, seed, as_json, force) -> None:
     """Record every standard bench test of SPEC's plant on its bench (noise and random forces as the
     profile says), for practice and to check identify against known values.
 
@@ -24,18 +25,20 @@ def bench_test_cmd(spec, out_dir, bench_name, seed, force) -> None:
     integrator-drift.csv into DIR; encoders in counts, a motor with its back-EMF and rotor, as the
     bench profile states them. `patchgen identify DIR -o OUT` takes the folder whole.
     """
-    from patchgen.design.model import plant_params
-    from patchgen.identify.benchtest import FILES, bench_test_files
+    from patchgen.identify.benchtest import FILES
+    from patchgen.pipeline.identify import run_bench_test
+    from patchgen.pipeline.inputs import load_inputs
     from patchgen.profiles.bench import load_bench
-    from patchgen.render.outputs import check_out_dir, write_files
-
-    from .inputs import load_inputs
+    from patchgen.render.outputs import check_out_dir, json_text, write_files
 
     check_out_dir(out_dir, FILES, force)
-    sp, machine, bench = load_inputs(spec)
-    if bench_name is not None:
-        bench = load_bench(bench_name, "--bench", "")
-    files = bench_test_files(plant_params(sp), bench, machine, seed, label=f"{sp.name} on bench {bench.id}")
-    written = write_files(out_dir, files, force=force)
-    click.echo(f"wrote {len(written)} recordings of {sp.name} on bench {bench.id} (seed {seed}) into {out_dir}; "
-               f"next: patchgen identify {out_dir} -o OUT")
+    inputs = load_inputs(spec)
+    if bench_name is not None:  # any bench: its sensors need not be those the spec's patch reads
+        inputs = inputs._replace(bench=load_bench(bench_name, "--bench", ""))
+    report = run_bench_test(inputs, seed)
+    written = write_files(out_dir, report.recordings, force=force)
+    if as_json:
+        click.echo(json_text(report.summary(written)), nl=False)
+        return
+    click.echo(f"wrote {len(written)} recordings of {report.spec} on bench {report.bench} (seed {seed}) into "
+               f"{out_dir}; next: patchgen identify {out_dir} -o OUT")

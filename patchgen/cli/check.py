@@ -7,17 +7,14 @@ import sys
 
 import click
 
-from patchgen.design.lqg import design_on
 from patchgen.inputs.errors import InputError
-from patchgen.patch.build import build_patch
-from patchgen.patch.fault_finding import diagnose_readings
-from patchgen.patch.readings import load_readings
-from patchgen.patch.static_check import static_check
+from patchgen.pipeline.check import run_check
+from patchgen.pipeline.inputs import load_inputs
 from patchgen.render.check_view import print_verdict
 from patchgen.render.outputs import json_text
 
 from . import cli
-from .inputs import load_inputs
+from .options import json_option
 
 DISAGREE_STATUS = 1  # the readings point at a fault
 
@@ -26,7 +23,7 @@ DISAGREE_STATUS = 1  # the readings point at a fault
 @click.argument("spec")
 @click.option("--readings", "readings_path", required=True, metavar="FILE",
               help="static-check.csv as patchgen patch wrote it, with the measured_V column filled in.")
-@click.option("--json", "as_json", is_flag=True, help="Print the verdict and the faults as JSON.")
+@json_option("the verdict and the faults")
 def check_cmd(spec: str, readings_path: str, as_json: bool) -> None:
     """Compare a filled static check with SPEC's patch and name the likeliest wrong pot, cord or sign.
 
@@ -35,18 +32,10 @@ def check_cmd(spec: str, readings_path: str, as_json: bool) -> None:
     """
     if not readings_path:
         raise InputError("--readings", "", "is an empty file name: give the filled static-check.csv")
-    sp, machine, bench = load_inputs(spec)
-    net = build_patch(design_on(sp, machine, bench), machine)
-    check = static_check(net, machine)
-    measured = load_readings(readings_path, check, machine)
-    verdict = diagnose_readings(net, machine, check, measured)
+    report = run_check(load_inputs(spec), readings_path)
     if as_json:
-        click.echo(json_text({
-            "design": net.design, "agree": verdict.agree, "mismatched": list(verdict.mismatched),
-            "faults": [{"kind": f.kind, "description": f.description, "chi_square": f.score,
-                        "explained": f.explained, "of": f.of, "consistent": f.consistent} for f in verdict.faults]}),
-            nl=False)
+        click.echo(json_text(report.summary()), nl=False)
     else:
-        print_verdict(net, check, verdict)
-    if not verdict.agree:
+        print_verdict(report.netlist, report.check, report.verdict)
+    if not report.verdict.agree:
         sys.exit(DISAGREE_STATUS)

@@ -5,19 +5,25 @@ from __future__ import annotations
 import click
 
 from patchgen.inputs.resources import EXAMPLES, example_files, shipped
-from patchgen.render.outputs import write_files
+from patchgen.render.outputs import json_text, write_files
 
 from . import cli
+from .options import FORCE, json_option
 
 
 @cli.command("examples")
 @click.argument("out_dir", metavar="DIR", type=click.Path(file_okay=False))
-@click.option("--force", is_flag=True, help="Replace files that already exist.")
-def examples_cmd(out_dir: str, force: bool) -> None:
+@FORCE
+@json_option("what was copied, by kind, and the files written")
+def examples_cmd(out_dir: str, force: bool, as_json: bool) -> None:
     """Copy the shipped designs (DIR/designs), scenarios (DIR/sims) and machine and bench
     profiles (DIR/machines, DIR/benches) into DIR, to edit and run by path."""
     written = write_files(out_dir, example_files(), force=force, option="DIR")
+    if as_json:
+        click.echo(json_text({"copied": {sub: list(shipped(kind)) for kind, sub in EXAMPLES.items()},
+                              "written": [str(p) for p in written]}), nl=False)
+        return
     for kind, sub in EXAMPLES.items():
         click.echo(f"{sub + '/':10} {', '.join(shipped(kind))}")
     click.echo(f"wrote {len(written)} files into {out_dir}; try: patchgen patch {out_dir}/designs/"
-               f"{shipped('design')[0]}.toml -o out")
+               f"{shipped('design')[0]}.toml -o {out_dir}/patch")

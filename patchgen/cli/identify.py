@@ -6,7 +6,7 @@ from __future__ import annotations
 import click
 
 from . import cli
-from .options import out_option
+from .options import FORCE, json_option, out_option
 
 
 @cli.command("identify")
@@ -19,8 +19,8 @@ from .options import out_option
                    "'# bench = <id>', else uw-1991).")
 @click.option("--id", "bench_id", default="identified", show_default=True, help="The new bench profile's id.")
 @click.option("--name", default=None, help="The new bench profile's name (default: from the recordings).")
-@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
-@click.option("--force", is_flag=True, help="Replace output files that already exist.")
+@json_option("the report")
+@FORCE
 def identify_cmd(recordings, out_dir, base, bench_id, name, as_json, force) -> None:
     """Fit a bench profile and the plant's friction and length to recordings of the standard tests.
 
@@ -29,29 +29,21 @@ def identify_cmd(recordings, out_dir, base, bench_id, name, as_json, force) -> N
     bench = "DIR/bench.toml"), DIR/plant.toml (a [plant] table for a spec), DIR/report.md,
     DIR/report.json and a fit plot per recording.
     """
-    from patchgen.identify.identify import identify
-    from patchgen.identify.recording import expand
     from patchgen.inputs.errors import InputError
+    from patchgen.pipeline.identify import run_identify
     from patchgen.profiles.bench import load_bench
-    from patchgen.render.identify_files import FIXED, identify_files
+    from patchgen.render.identify_files import FIXED, identify_files, print_identification
     from patchgen.render.outputs import check_out_dir, write_files
 
     if not bench_id.strip():
         raise InputError("--id", "", "empty: name the profile")
     check_out_dir(out_dir, FIXED, force)
-    profile = None if base is None else load_bench(base, "--base", "")
-    files = expand(list(recordings))
-    result = identify(files, profile)
+    report = run_identify(list(recordings), None if base is None else load_bench(base, "--base", ""))
+    files, result = list(report.files), report.result
     title = name or f"identified from {len(files)} recordings"
     outputs = identify_files(result, files, result.profile, bench_id, title)
     written = write_files(out_dir, outputs, force=force)
     if as_json:
         click.echo(outputs["report.json"].decode(), nl=False)
-        return
-    for w in result.warnings:
-        click.echo(f"warning: {w}", err=True)
-    for key, p in list(result.bench.items()) + list(result.plant.items()):
-        e = p.estimate
-        shown = p.value if isinstance(p.value, str) else f"{p.value:.5g}"
-        click.echo(f"{key:32} {shown:>12} {p.unit:9} " + (f"95 %: {e.low:.4g} to {e.high:.4g}" if e else p.origin))
-    click.echo(f"wrote {len(written)} files into {out_dir}")
+    else:
+        print_identification(result, written, out_dir)

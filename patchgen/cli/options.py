@@ -23,8 +23,35 @@ def out_option(what: str):
                         help=f"Directory for {what}.")
 
 
+def json_option(what: str):
+    """The ``--json`` flag: print ``what`` as one JSON object instead of the terminal view."""
+    return click.option("--json", "as_json", is_flag=True, help=f"Print {what} as JSON.")
+
+
+def svg_option(what: str):
+    """The ``--svg`` flag: also write ``what`` as SVG."""
+    return click.option("--svg", is_flag=True, help=f"Also write {what} as SVG (PNG only by default).")
+
+
+def seed_option(default: int | None, what: str):
+    """The ``--seed`` option: ``what`` it seeds."""
+    return click.option("--seed", type=SEED, default=default, show_default=default is not None, help=what)
+
+
+# replace what a command would write: every writing command takes it
+FORCE = click.option("--force", is_flag=True, help="Replace output files that already exist.")
+
 # a scenario the command must be given
-SCENARIO = click.option("--scenario", "scenario_path", required=True, help="Scenario TOML (see sims/).")
+SCENARIO = click.option("--scenario", "scenario_path", required=True,
+                        help="Scenario: a shipped name (hold-120s, offset-10deg, ...; patchgen examples copies "
+                             "them) or a TOML file.")
+
+
+def bench_option(extra: str = ""):
+    """The ``--bench`` option: another bench profile than the spec's; ``extra`` says what follows."""
+    return click.option("--bench", "bench_name", default=None, metavar="BENCH",
+                        help="Bench profile (a shipped id or a TOML file) instead of the spec's" + (
+                            f"; {extra}" if extra else "."))
 
 
 class FiniteFloat(click.ParamType):

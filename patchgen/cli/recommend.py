@@ -8,21 +8,17 @@ import sys
 import click
 
 from patchgen.bench.prediction import STANDARD
+from patchgen.pipeline.inputs import load_inputs, scenario_for
+from patchgen.pipeline.recommend import RecommendPlan, run_recommend
 from patchgen.profiles.bench import bench_scenarios
 from patchgen.render.outputs import check_out_dir, write_files
-from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.recommend_view import print_recommendation, progress_bar
-from patchgen.render.recommendation_files import (
-    RECOMMENDED_SPEC,
-    recommendation_files,
-)
-from patchgen.studies.recommend import RUNS, recommend
+from patchgen.render.recommendation_files import RECOMMEND_FILES, recommendation_files
+from patchgen.studies.recommend import RUNS
 
 from . import cli
-from .inputs import load_inputs, scenario_for
-from .options import SEED, out_option
+from .options import FORCE, bench_option, json_option, out_option, seed_option
 
-RECOMMEND_FILES = PATCH_FILES + ("recommendation.md", "recommendation.json", RECOMMENDED_SPEC)
 NONE_CHOSEN_STATUS = 1  # the comparison is written, but no realisation holds on the bench
 
 
@@ -34,14 +30,13 @@ NONE_CHOSEN_STATUS = 1  # the comparison is written, but no realisation holds on
 @click.option("--scenario", "scenario_paths", multiple=True, metavar="SCENARIO",
               help="A scenario every realisation must hold: a shipped name or a TOML file; repeat for more "
                    f"[default: the bench profile's scenarios, else every shipped one: {', '.join(STANDARD)}].")
-@click.option("--seed", default=None, type=SEED, help="Base seed of every scenario (default: each scenario's own).")
+@seed_option(None, "Base seed of every scenario (default: each scenario's own).")
 @click.option("--all-runs", is_flag=True, help="Run every realisation --runs times on every scenario (no early "
               "stop once a realisation clearly holds or fails).")
-@click.option("--bench", "bench_name", default=None, metavar="BENCH",
-              help="Bench profile (a shipped id or a TOML file) instead of the spec's; when it states ranges for its "
-                   "parameters, every run draws its bench from them and every corner is checked.")
-@click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
-@click.option("--force", is_flag=True, help="Replace output files that already exist.")
+@bench_option("when it states ranges for its parameters, every run draws its bench from them and every corner "
+              "is checked.")
+@json_option("the comparison")
+@FORCE
 def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_name, as_json, force):
     """Run every realisation of SPEC on the bench in every scenario; write the best patch and its spec.
 
@@ -54,18 +49,18 @@ def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_nam
     of every scenario, variants included.
     """
     check_out_dir(out_dir, RECOMMEND_FILES, force)
-    sp, machine, bench = load_inputs(spec, bench_name)
-    if bench_name is not None:
-        sp = sp.model_copy(update={"bench": bench_name})
-    scenarios = tuple(scenario_for(p, sp, runs).judged() for p in (scenario_paths or bench_scenarios(bench)))
+    inputs = load_inputs(spec, bench_name, "--bench")
+    if bench_name is not None:  # the recommended spec names the bench it was chosen on
+        inputs = inputs._replace(spec=inputs.spec.model_copy(update={"bench": bench_name}))
+    scenarios = tuple(scenario_for(p, inputs.spec, runs).judged()
+                      for p in (scenario_paths or bench_scenarios(inputs.bench)))
     with progress_bar() as progress:
-        rec = recommend(sp, machine, bench, scenarios, runs, seed, early_stop=not all_runs, progress=progress)
-    best = rec.best
-    files = recommendation_files(rec, machine, bench)
+        report = run_recommend(inputs, scenarios, RecommendPlan(runs, seed, not all_runs), progress)
+    files = recommendation_files(report, inputs.machine, inputs.bench)
     written = write_files(out_dir, files, force=force)
     if as_json:
         click.echo(files["recommendation.json"], nl=False)
     else:
-        print_recommendation(rec, machine, sp.name, runs, written)
-    if best is None:
+        print_recommendation(report.recommendation, inputs.machine, inputs.spec.name, runs, written)
+    if report.best is None:
         sys.exit(NONE_CHOSEN_STATUS)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from patchgen.pipeline.inputs import load_inputs, scenario_for
 from patchgen.pipeline.simulate import SimulatePlan, run_simulate
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, json_text, write_files
@@ -11,8 +12,7 @@ from patchgen.render.simulate_view import print_report, progress_bar
 from patchgen.render.simulation_files import output_files
 
 from . import cli
-from .inputs import load_inputs, scenario_for
-from .options import SCENARIO, SEED, out_option
+from .options import FORCE, SCENARIO, bench_option, json_option, out_option, seed_option, svg_option
 
 SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "history.svg", "netlist.json")
 
@@ -21,7 +21,7 @@ SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "his
 @click.argument("spec")
 @SCENARIO
 @out_option("history.csv, runs.csv, summary.json and the plots")
-@click.option("--seed", type=SEED, default=None, help="Noise seed (default: the scenario's).")
+@seed_option(None, "Noise seed (default: the scenario's).")
 @click.option("--runs", type=click.IntRange(1, 1_000_000), default=1, show_default=True,
               help="Monte Carlo runs over noise seeds.")
 @click.option("--ideal", is_flag=True, help="Every imperfection off (noise, drift, saturation, actuator lag "
@@ -30,16 +30,15 @@ SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "his
               help="Monte Carlo over the plant too: each run draws M, m, l, b_VF, c uniformly within this "
               "fraction of the spec's values (e.g. 10%).")
 @click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters --spread draws.")
-@click.option("--bench", "bench_name", default=None, metavar="BENCH",
-              help="Bench profile (a shipped id or a TOML file) instead of the spec's.")
+@bench_option()
 @click.option("--bench-spread", is_flag=True, help="Monte Carlo over the bench too: each run draws the bench's "
               "parameters from the profile's [uncertainty] ranges; the summary adds every corner of the ranges "
               "and the worst.")
 @click.option("--corner-runs", type=click.IntRange(1, 100_000), default=None,
               help="Runs at each corner of the bench's ranges with --bench-spread [default: --runs].")
-@click.option("--svg", is_flag=True, help="Also write the plot as history.svg (PNG only by default).")
-@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
-@click.option("--force", is_flag=True, help="Replace output files that already exist.")
+@svg_option("the plot (history.svg)")
+@json_option("the summary (summary.json)")
+@FORCE
 def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, bench_name, bench_spread,
                  corner_runs, svg, as_json, force) -> None:
     """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
@@ -51,12 +50,12 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
         spread = {name: frac for name in parse_vary(vary)}
     check_out_dir(out_dir, SIMULATE_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one simulates
-    sp, machine, bench = load_inputs(spec, bench_name)
-    scenario = scenario_for(scenario_path, sp, runs, ideal)
+    inputs = load_inputs(spec, bench_name, "--bench")
+    scenario = scenario_for(scenario_path, inputs.spec, runs, ideal)
     plan = SimulatePlan(runs=runs, seed=seed, ideal=ideal, spread=spread, bench_spread=bench_spread,
                         corner_runs=corner_runs)
     with progress_bar(scenario.name, runs, as_json) as progress:
-        report = run_simulate(sp, machine, bench, scenario, plan, progress)
+        report = run_simulate(inputs, scenario, plan, progress)
     summary = report.summary()
     files = output_files(report.result, svg, summary)
     files["netlist.json"] = report.netlist.to_json().encode()

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from patchgen.pipeline.inputs import check_spice_points, load_inputs, scenario_for
 from patchgen.pipeline.spice import SpicePlan, run_spice, spice_job
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, json_text, write_files
@@ -14,8 +15,7 @@ from patchgen.render.spice_view import deck_files, print_spice, spice_files
 from patchgen.spice.run import NgspiceError, NgspiceMissing
 
 from . import cli
-from .inputs import check_spice_points, load_inputs, scenario_for
-from .options import SCENARIO, FiniteFloat, out_option
+from .options import FORCE, SCENARIO, FiniteFloat, json_option, out_option, svg_option
 
 SPICE_FILES = ("patch.cir", "patch.data", "comparison.json", "overlay.png", "overlay.svg")
 
@@ -32,19 +32,19 @@ NO_NGSPICE_STATUS = NgspiceMissing.exit_status
               help="Output step of the transient (s).")
 @click.option("--tolerance", type=FiniteFloat(0, 1), default=0.01, show_default=True,
               help="Agreement required, as a fraction of each signal's peak.")
-@click.option("--svg", is_flag=True, help="Also write the overlay plot as overlay.svg (PNG only by default).")
-@click.option("--json", "as_json", is_flag=True, help="Print the comparison as JSON.")
-@click.option("--force", is_flag=True, help="Replace output files that already exist.")
+@svg_option("the overlay plot (overlay.svg)")
+@json_option("the comparison")
+@FORCE
 def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_json, force) -> None:
     """Export SPEC's patch and the bench as an ngspice deck, run it, and compare with patchgen's own
     simulation of the same scenario. Exit 0 when they agree within --tolerance, 1 when not,
     3 without ngspice (the deck is still written)."""
     check_out_dir(out_dir, SPICE_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while ngspice runs
-    sp, machine, bench = load_inputs(spec)
-    scenario = scenario_for(scenario_path, sp, 1, ideal)
+    inputs = load_inputs(spec)
+    scenario = scenario_for(scenario_path, inputs.spec, 1, ideal)
     check_spice_points(scenario, step_s)
-    job = spice_job(sp, machine, bench, scenario, SpicePlan(ideal=ideal, step_s=step_s, tolerance=tolerance))
+    job = spice_job(inputs, scenario, SpicePlan(ideal=ideal, step_s=step_s, tolerance=tolerance))
     try:
         report = run_spice(job)
     except NgspiceMissing as exc:

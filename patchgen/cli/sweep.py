@@ -4,15 +4,14 @@ from __future__ import annotations
 
 import click
 
-from patchgen.design.lqg import design_on
+from patchgen.pipeline.inputs import load_inputs, scenario_for
+from patchgen.pipeline.sweep import SweepPlan, run_sweep
 from patchgen.plant.cart_pendulum import UNCERTAIN
 from patchgen.render.outputs import json_text
 from patchgen.render.sweep_view import print_sweep
-from patchgen.studies.sweep import sweep
 
 from . import cli
-from .inputs import load_inputs, scenario_for
-from .options import parse_by, parse_vary
+from .options import json_option, parse_by, parse_vary
 
 
 @cli.command("sweep")
@@ -25,16 +24,15 @@ from .options import parse_by, parse_vary
               help="Scenario (shipped name or TOML file) for the nominal patch's predicted outcome.")
 @click.option("--runs", type=click.IntRange(1, 10000), default=1, show_default=True,
               help="Noise seeds per row for the predicted outcome.")
-@click.option("--json", "as_json", is_flag=True, help="Print the rows as JSON.")
+@json_option("the rows")
 def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: str, runs: int, as_json: bool) -> None:
     """Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2): the gains, the
     margins, the pots that would change, and how the nominal patch (as wired) does on that plant."""
-    names, by = parse_vary(vary), parse_by(by_text)
-    sp, machine, bench = load_inputs(spec)
-    scenario = scenario_for(scenario_path, sp, runs)  # a bad scenario fails here, in one line
-    d = design_on(sp, machine, bench)
-    rows = sweep(d.spec, machine, names, by, workers, scenario, runs, bench=bench)
+    plan = SweepPlan(tuple(parse_vary(vary)), parse_by(by_text), workers, runs)
+    inputs = load_inputs(spec)
+    scenario = scenario_for(scenario_path, inputs.spec, runs)  # a bad scenario fails here, in one line
+    report = run_sweep(inputs, scenario, plan)
     if as_json:
-        click.echo(json_text([r.as_dict() for r in rows]), nl=False)
+        click.echo(json_text(report.summary()), nl=False)
         return
-    print_sweep(d, rows, by)
+    print_sweep(report.design, list(report.rows), plan.by)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from patchgen.pipeline.inputs import load_inputs
 from patchgen.pipeline.swingup import SwingupPlan, run_swingup
 from patchgen.render import plot_helper
 from patchgen.render.outputs import check_out_dir, write_files
@@ -13,12 +14,10 @@ from patchgen.swingup.manoeuvre import BENCH_HOLD_S
 from patchgen.swingup.strategies import STRATEGIES
 
 from . import cli
-from .inputs import load_inputs
-from .options import SEED, FiniteFloat, out_option
+from .options import FORCE, FiniteFloat, json_option, out_option, seed_option, svg_option
 
 SWINGUP_FILES = PATCH_FILES + ("swingup-history.csv", "swingup-switching.csv", "swingup-switching.md", "swingup.png",
                                "swingup.svg", "manoeuvre.png", "manoeuvre.svg", "manoeuvre.json")
-SHEET_HOLD_RUNS = 10  # seeds of the sheet's 120 s hold: fewer than patchgen patch's, as the manoeuvre runs too
 
 
 @cli.command("swingup")
@@ -31,22 +30,22 @@ SHEET_HOLD_RUNS = 10  # seeds of the sheet's 120 s hold: fewer than patchgen pat
               help="Largest force (N) for the pump-up (default: the bench actuator's limit).")
 @click.option("--hold", "hold_s", type=FiniteFloat(0.1, 3600), default=BENCH_HOLD_S, show_default=True,
               help="Seconds the patched controller must hold after the hand-off (at most an hour).")
-@click.option("--seed", type=SEED, default=0, show_default=True, help="Noise seed of the hold.")
+@seed_option(0, "Noise seed of the hold.")
 @click.option("--compare", is_flag=True, help="Also compare the three strategies (time to the zone, cart "
               "excursion, success on plants off by +/-10%); takes about a minute.")
-@click.option("--svg", is_flag=True, help="Also write the plots as SVG (PNG only by default).")
-@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
-@click.option("--force", is_flag=True, help="Replace output files that already exist.")
+@svg_option("the plots")
+@json_option("the summary (manoeuvre.json)")
+@FORCE
 def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg, as_json, force) -> None:
     """Pump SPEC's pendulum up from hanging at rest, hand it to the patched controller when the state
     enters the zone of the linear design, and hold it on the bench (actuator lag and dead zone,
     noise, drift)."""
     check_out_dir(out_dir, SWINGUP_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one computes
-    sp, machine, bench = load_inputs(spec)
+    inputs = load_inputs(spec)
     plan = SwingupPlan(strategy=strategy, force_limit_N=force_limit, hold_s=hold_s, seed=seed, compare=compare)
-    report = run_swingup(sp, machine, bench, plan, comparing=comparing)
-    files = swingup_files(report, machine, bench, svg, SHEET_HOLD_RUNS)
+    report = run_swingup(inputs, plan, comparing=comparing)
+    files = swingup_files(report, inputs.machine, inputs.bench, svg)
     written = write_files(out_dir, files, force=force)
     if as_json:
         click.echo(files["manoeuvre.json"], nl=False)

@@ -14,7 +14,7 @@ import scipy.linalg as sla
 from patchgen.design import corner
 from patchgen.design.controller import Controller, Estimator, RhoTry, integrator_part
 from patchgen.design.margins import Margins, loop_margins
-from patchgen.design.model import LinearModel, build_model, open_loop_poles, plant_zeros
+from patchgen.design.model import LinearModel, build_model, open_loop_poles, plant_params, plant_zeros
 from patchgen.design.numerics import failing_as
 from patchgen.design.observer import ObserverError, reduced_observer, reduced_observer_controller
 from patchgen.design.precision import GainSpread
@@ -61,6 +61,12 @@ class Design:
     def states(self) -> tuple[str, ...]:
         """The design model's states, in K's order."""
         return self.model.states
+
+    @property
+    def plant(self) -> PlantParams:
+        """The spec's plant as the plant equations take them (the mechanism; the drive is the
+        spec's actuator): what every stage after the design simulates, linearises or patches for."""
+        return plant_params(self.spec)
 
     def gain(self, state: str) -> float:
         """The LQR gain on one named state (u = -K x)."""

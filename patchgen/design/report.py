@@ -23,6 +23,15 @@ def margins_dict(m: Margins | None) -> dict | None:
                               "pm_freq", "delay_margin_s", "gain_crossovers", "phase_crossovers")}
 
 
+def design_notes(d: Design) -> list[str]:
+    """What the linear design leaves out, in words (the report prints them, the JSON carries them)."""
+    a = d.spec.actuator
+    if a.dead_zone_V:
+        return [f"the dead zone ({a.dead_zone_V} V) is invisible to the linear design; the bench simulation "
+                "includes it"]
+    return []
+
+
 def design_dict(d: Design) -> dict:
     """Everything a script wants from a design, JSON-serialisable. u = -K x."""
     spec = d.spec
@@ -46,6 +55,9 @@ def design_dict(d: Design) -> dict:
         "zeros": {k: [_c(z) for z in v] for k, v in d.zeros.items()},
         "lqr_margins": margins_dict(d.lqr_margins),
         "actuator_model": spec.actuator.model,
+        "actuator_K_U": spec.actuator.K_U,  # N/V
+        "actuator_tau_s": None if spec.actuator.model == "gain" else spec.actuator.tau,
+        "notes": design_notes(d),
     }
     if d.estimator is not None:
         e = d.estimator

@@ -9,7 +9,8 @@ class InputError(Exception):
     Parameters
     ----------
     source : str
-        The file (or option) at fault.
+        The file at fault, or the run-plan field (``runs``, ``bench_spread``): the command line
+        names a field by the option that set it (``--runs``).
     field : str
         The field path inside it (``weights.Q.theta``), or "" for the file as a whole.
     message : str

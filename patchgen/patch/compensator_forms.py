@@ -32,7 +32,6 @@ import scipy.linalg as sla
 
 from patchgen.design.compensator import Compensator
 from patchgen.design.lqg import Design
-from patchgen.design.model import plant_params
 from patchgen.patch import large_gains
 from patchgen.patch.realization import Block, Realization, Term
 from patchgen.plant.equations import PLANT_STATES, linear_matrices
@@ -124,7 +123,7 @@ def scaling_plants(design: Design) -> list[tuple[np.ndarray, np.ndarray, np.ndar
     keep = [i for i, s in enumerate(model.states) if not s.startswith("int_")]
     out = [(model.A[np.ix_(keep, keep)], model.B[keep], model.C[:, keep], [model.states[i] for i in keep])]
     if len(keep) > 4:
-        Ap, Bp = linear_matrices(plant_params(design.spec))
+        Ap, Bp = linear_matrices(design.plant)
         Cp = np.zeros((len(model.measured), 4))
         names = list(PLANT_STATES)
         for r, m in enumerate(model.measured):

@@ -11,14 +11,12 @@ from patchgen.bench.diagnosis import LoopPoles, diagnose
 from patchgen.bench.results import SimResult
 from patchgen.bench.simulate import simulate
 from patchgen.design.lqg import design_on
-from patchgen.design.model import plant_params
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
-from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
+from patchgen.pipeline.inputs import Inputs
 from patchgen.profiles.bench import BenchProfile
-from patchgen.profiles.machine import MachineProfile
 from patchgen.studies import bench_corners
 
 
@@ -68,14 +66,14 @@ class SimulateReport:
         return []
 
 
-def run_simulate(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenario: Scenario,
-                 plan: SimulatePlan, progress: Callable[[int], None] | None = None) -> SimulateReport:
+def run_simulate(inputs: Inputs, scenario: Scenario, plan: SimulatePlan,
+                 progress: Callable[[int], None] | None = None) -> SimulateReport:
     """Design the spec on its machine and bench, patch it, and simulate the patch on the bench.
 
     Parameters
     ----------
-    spec, machine, bench : DesignSpec, MachineProfile, BenchProfile
-        The inputs, resolved and checked.
+    inputs : Inputs
+        The spec, machine and bench, resolved and checked.
     scenario : Scenario
         What happens, checked against the spec's track.
     plan : SimulatePlan
@@ -88,11 +86,12 @@ def run_simulate(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile,
     SimulateReport
         The runs, the corners and the linear verdicts.
     """
+    spec, machine, bench = inputs
     if plan.bench_spread and not bench.uncertainty.ranges:
-        raise InputError("--bench-spread", "", f"the bench {bench.id} states no [uncertainty] ranges")
+        raise InputError("bench_spread", "", f"the bench {bench.id} states no [uncertainty] ranges")
     d = design_on(spec, machine, bench)
     net = build_patch(d, machine)
-    plant = plant_params(d.spec)
+    plant = d.plant
     result = simulate(net, plant, bench, machine, scenario, seed=plan.seed, runs=plan.runs, ideal=plan.ideal,
                       spread=plan.spread, bench_spread=plan.bench_spread, progress=progress)
     corners = None

@@ -13,11 +13,10 @@ import numpy as np
 from patchgen.bench.noise_drift import noise_and_drift
 from patchgen.bench.simulate import simulate
 from patchgen.design.lqg import Design, design_on
-from patchgen.design.model import plant_params
 from patchgen.inputs.scenario import Scenario
-from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
+from patchgen.pipeline.inputs import Inputs
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
@@ -81,13 +80,13 @@ class _Own:
         self.signals = {k: v for k, v in history.items() if k != "t"}
 
 
-def spice_job(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenario: Scenario,
-              plan: SpicePlan) -> SpiceJob:
+def spice_job(inputs: Inputs, scenario: Scenario, plan: SpicePlan) -> SpiceJob:
     """Design and patch the spec, and write its deck for the scenario (SPICE settings from the
     profiles or, ideal, with noise and drift off and the actuator a pure gain)."""
+    spec, machine, bench = inputs
     d = design_on(spec, machine, bench)
     net = build_patch(d, machine)
-    plant = plant_params(d.spec)
+    plant = d.plant
     levels = noise_and_drift([s.id for s in net.sensors], bench, machine, scenario, plan.ideal)
     settings = SpiceSettings(duration_s=scenario.duration_s, step_s=plan.step_s,
                              x0=tuple(scenario.initial.vector()), noise_and_drift=levels,

@@ -6,28 +6,32 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+from patchgen.bench.diagnosis import as_patched_on_bench
 from patchgen.design.lqg import Design, design_on
-from patchgen.design.model import plant_params
-from patchgen.inputs.spec import DesignSpec
+from patchgen.patch.as_patched import AsPatched
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
+from patchgen.pipeline.inputs import Inputs
+from patchgen.pipeline.prediction import BenchPrediction, predict_on_bench
 from patchgen.plant.equations import PlantParams
-from patchgen.profiles.bench import BenchProfile
-from patchgen.profiles.machine import MachineProfile
 from patchgen.swingup.manoeuvre import BENCH_HOLD_S, Manoeuvre, manoeuvre
 from patchgen.swingup.run import StrategySummary, compare_strategies
+
+SHEET_HOLD_RUNS = 10  # seeds of the sheet's 120 s hold: fewer than patchgen patch's, as the manoeuvre runs too
 
 
 @dataclass(frozen=True)
 class SwingupPlan:
     """The strategy, the pump-up's force limit (None: the bench actuator's), the hold after the
-    hand-off (s), the hold's noise seed, and whether to compare the strategies too."""
+    hand-off (s), the hold's noise seed, whether to compare the strategies too, and the seeds of
+    the sheet's predicted 120 s hold."""
 
     strategy: str = "supervisory"
     force_limit_N: float | None = None
     hold_s: float = BENCH_HOLD_S
     seed: int = 0
     compare: bool = False
+    sheet_runs_hold: int = SHEET_HOLD_RUNS
 
 
 @dataclass(frozen=True)
@@ -42,6 +46,8 @@ class SwingupReport:
     force_limit_N: float
     manoeuvre: Manoeuvre
     comparison: tuple[StrategySummary, ...] | None
+    judged: AsPatched
+    prediction: BenchPrediction
 
     def summary(self) -> dict:
         """Every figure and verdict, as plain JSON-able data (manoeuvre.json, --json)."""
@@ -66,14 +72,13 @@ def _plain(row) -> dict:
     return {k: v.item() if hasattr(v, "item") else v for k, v in asdict(row).items()}
 
 
-def run_swingup(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, plan: SwingupPlan,
-                comparing=None) -> SwingupReport:
+def run_swingup(inputs: Inputs, plan: SwingupPlan, comparing=None) -> SwingupReport:
     """Design and patch the spec, pump its pendulum up, hand off and hold on the bench.
 
     Parameters
     ----------
-    spec, machine, bench : DesignSpec, MachineProfile, BenchProfile
-        The inputs, resolved and checked.
+    inputs : Inputs
+        The spec, machine and bench, resolved and checked.
     plan : SwingupPlan
         Strategy, force limit, hold, seed, comparison.
     comparing : callable, optional
@@ -84,9 +89,10 @@ def run_swingup(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, 
     SwingupReport
         The manoeuvre and, when asked, the strategies compared.
     """
+    spec, machine, bench = inputs
     d = design_on(spec, machine, bench)
     net = build_patch(d, machine)
-    plant = plant_params(d.spec)
+    plant = d.plant
     force = plan.force_limit_N or bench.actuator.force_limit_N
     m = manoeuvre(net, plant, bench, machine, d.K[:, :4], plan.strategy, force, plan.hold_s, plan.seed)
     comparison = None
@@ -96,4 +102,6 @@ def run_swingup(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, 
         else:
             with comparing():
                 comparison = tuple(compare_strategies(plant, force, d.K[:, :4], m.zone))
-    return SwingupReport(d, net, plant, plan, force, m, comparison)
+    judged = as_patched_on_bench(d, net, machine, bench)
+    pred = predict_on_bench(d, net, machine, bench, plan.sheet_runs_hold)
+    return SwingupReport(d, net, plant, plan, force, m, comparison, judged, pred)

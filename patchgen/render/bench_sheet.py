@@ -1,9 +1,6 @@
-"""A patch's files with its bench prediction on the sheet: the patch simulated in the standard
-scenarios (patchgen.bench.prediction), as the sheet's 'Predicted on the bench' section.
-
-The simulator (numba) is imported only when a prediction is made, so a patch without one stays
-light.
-"""
+"""The sheet's 'Predicted on the bench' section, worded from the pipeline's BenchPrediction
+(patchgen.pipeline.prediction): one row per scenario, the bench's figures, the linearised loop and
+the ranges; and a patch's files with that section first on its sheet."""
 
 from __future__ import annotations
 
@@ -12,10 +9,10 @@ from pathlib import PurePath
 from typing import TYPE_CHECKING
 
 from patchgen.design.lqg import Design
-from patchgen.design.model import plant_params
-from patchgen.inputs.scenario import load_scenario
 from patchgen.patch.as_patched import AsPatched
 from patchgen.patch.netlist import Netlist
+from patchgen.pipeline.patch import PatchReport
+from patchgen.pipeline.prediction import BenchPrediction
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.profiles.uncertainty import UNITS
@@ -23,50 +20,31 @@ from patchgen.render.patchfiles import patch_files
 from patchgen.render.sheet import SheetSection
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator loads numba, only when a prediction is made
-    from patchgen.bench.simulate import RunSummary
+    from patchgen.bench.prediction import Prediction
     from patchgen.studies.bench_corners import BenchStudy
 
-PREDICTION_TARGET = 0.95  # a scenario held in fewer of its runs than this is a predicted failure
-HOLD_RUNS = 20  # noise seeds of the sheet's 120 s hold unless asked otherwise (patchgen patch --runs)
-HOLD_SCENARIO = "hold-120s"  # the scenario run at the corners of the bench's ranges
 
-
-def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: Netlist,
-                  runs_hold: int = HOLD_RUNS, done: dict[str, list[RunSummary]] | None = None,
-                  corners: BenchStudy | None = None) -> SheetSection:
+def bench_section(pred: BenchPrediction, d: Design, machine: MachineProfile, bench: BenchProfile,
+                  net: Netlist) -> SheetSection:
     """'Predicted on the bench': the patch in the standard scenarios, with the bench's figures.
 
     Parameters
     ----------
+    pred : BenchPrediction
+        The prediction (patchgen.pipeline.prediction.predict_on_bench).
     d : Design
-        The design the patch realises (its spec gives the plant and the track).
+        The design the patch realises (its spec gives the track).
     machine, bench : MachineProfile, BenchProfile
-        The machine the patch is on and the bench it is simulated against.
+        The machine the patch is on and the bench it was simulated against.
     net : Netlist
         The patch.
-    runs_hold : int
-        Noise seeds of the long hold.
-    done : dict, optional
-        Runs already simulated, by scenario name (see patchgen.bench.prediction.predict).
-    corners : BenchStudy, optional
-        The patch at the corners of the bench's ranges, when already run; when the bench states
-        ranges and none is given, the hold is run at every corner (``runs_hold`` seeds each).
 
     Returns
     -------
     SheetSection
         One row per scenario and a note naming the bench's figures and the linearised loop.
     """
-    from patchgen.bench.diagnosis import diagnose
-    from patchgen.bench.prediction import diagnosis_note, predict, prediction_rows  # the simulator: numba
-    from patchgen.studies.bench_corners import study
-
-    plant = plant_params(d.spec)
-    spread = bool(bench.uncertainty.ranges)
-    preds = predict(net, plant, bench, machine, runs_hold=runs_hold, done=done, bench_spread=spread)
-    if spread and corners is None:
-        corners = study(net, plant, bench, machine, load_scenario(HOLD_SCENARIO), corner_runs=runs_hold)
-    header, rows = prediction_rows(preds)
+    header, rows = prediction_rows(pred.predictions)
     dist = bench.disturbance
     note = (f"From this netlist on the {bench_named(bench)}: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
             f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; random "
@@ -74,9 +52,26 @@ def bench_section(d: Design, machine: MachineProfile, bench: BenchProfile, net: 
             f"N rms at the tip (to {dist.bandwidth_Hz:g} Hz); drift "
             f"{_drift_text(net, machine)} ({machine.imperfections.drift_source}); "
             f"rails +/-{machine.imperfections.saturation_V:g} V; switches at +/-{d.spec.plant.d / 2:g} m. "
-            + diagnosis_note(net, plant, bench) + (" " + ranges_note(corners) if spread else ""))
-    return SheetSection("Predicted on the bench", header, rows, note,
-                        banner=failure_banner(bench.id, diagnose(net, plant, bench)[-1], preds))
+            + diagnosis_note(pred) + (" " + ranges_note(pred.corners) if pred.corners is not None else ""))
+    return SheetSection("Predicted on the bench", header, rows, note, banner=failure_banner(bench.id, pred))
+
+
+def prediction_rows(preds: Sequence[Prediction]) -> tuple[list[str], list[list[str]]]:
+    """The predictions as a table for the patch sheet: (header, rows of text)."""
+    header = ["scenario", "runs", "held", "limit switch (run 0)", "fallen (run 0)", "max |theta| (deg)",
+              "max |s| (m)", "overloads"]
+    rows = []
+    for p in preds:
+        rows.append([p.scenario, str(p.runs), f"{100 * p.fraction_held:.0f} %",
+                     "no" if p.first_trip_s is None else f"at {p.first_trip_s:.2f} s",
+                     "no" if p.first_fall_s is None else f"at {p.first_fall_s:.2f} s",
+                     f"{p.max_theta_deg:.2f}", f"{p.max_s_m:.3f}", p.overloads])
+    return header, rows
+
+
+def diagnosis_note(pred: BenchPrediction) -> str:
+    """The linearised loop's verdicts (see patchgen.bench.diagnosis) as one sentence for the sheet."""
+    return "Linearised: " + "; ".join(lp.line() for lp in pred.loops) + "."
 
 
 def _drift_text(net, machine) -> str:
@@ -112,10 +107,11 @@ def ranges_note(st: BenchStudy) -> str:
             f"{w.held_text()}.")
 
 
-def failure_banner(bench_id: str, loop, preds) -> str:
+def failure_banner(bench_id: str, pred: BenchPrediction) -> str:
     """One line for the top of the sheet when the prediction fails ("" when it holds): the wired
     loop's verdict on the bench when it is not stable, and the scenarios held in under 95 % of runs."""
-    failing = [f"{p.scenario} {100 * p.fraction_held:.0f} %" for p in preds if p.fraction_held < PREDICTION_TARGET]
+    loop = pred.loops[-1]
+    failing = [f"{p.scenario} {100 * p.fraction_held:.0f} %" for p in pred.failing]
     if loop.verdict == "stable" and not failing:
         return ""
     w = loop.worst
@@ -129,14 +125,18 @@ def failure_banner(bench_id: str, loop, preds) -> str:
 
 
 def predicted_patch_files(d: Design, machine: MachineProfile, bench: BenchProfile, net: Netlist,
-                          sections: Sequence[SheetSection] = (), runs_hold: int = HOLD_RUNS,
-                          done: dict[str, list[RunSummary]] | None = None,
-                          corners: BenchStudy | None = None, judged: AsPatched | None = None) -> dict[str, str]:
+                          pred: BenchPrediction, judged: AsPatched,
+                          sections: Sequence[SheetSection] = ()) -> dict[str, str]:
     """Every file of a patch (patchgen.render.patchfiles.PATCH_FILES), the bench prediction first
-    on the sheet, then ``sections``; arguments as :func:`bench_section`, and the patch judged as
-    patched (patchgen.bench.diagnosis.as_patched_on_bench, computed when not given)."""
-    from patchgen.bench.diagnosis import as_patched_on_bench
+    on the sheet, then ``sections``; the patch judged as patched on the bench
+    (patchgen.bench.diagnosis.as_patched_on_bench) on its margins page."""
+    return patch_files(d, machine, net, [bench_section(pred, d, machine, bench, net), *sections], judged)
 
-    judged = judged if judged is not None else as_patched_on_bench(d, net, machine, bench)
-    return patch_files(d, machine, net, [bench_section(d, machine, bench, net, runs_hold, done, corners), *sections],
-                       judged)
+
+def patch_report_files(report: PatchReport, machine: MachineProfile, bench: BenchProfile) -> dict[str, str]:
+    """Every file patchgen patch writes, from its report: the bench prediction on the sheet when
+    the report has one."""
+    d, net = report.design, report.netlist
+    if report.prediction is None:
+        return patch_files(d, machine, net, judged=report.judged)
+    return predicted_patch_files(d, machine, bench, net, report.prediction, report.judged)

@@ -9,6 +9,7 @@ from rich.table import Table
 from patchgen.design.lqg import Design
 from patchgen.design.margins import Margins
 from patchgen.design.precision import gain_text, significant_digits
+from patchgen.design.report import design_notes
 
 REPORT_DIGITS = 7  # significant digits of a gain in the report (the thesis prints -249.4119)
 SMALL_POLE = 1e-3  # 1/s: a pole nearer the origin than this prints in significant digits, not four decimals
@@ -58,9 +59,8 @@ def print_design(d: Design, console: Console | None = None) -> None:
         console.print(f"source: {spec.source}")
     console.print(f"actuator model (design): {spec.actuator.model}, K_U = {spec.actuator.K_U} N/V"
                   + (f", tau = {spec.actuator.tau} s" if spec.actuator.model != "gain" else ""))
-    if spec.actuator.dead_zone_V:
-        console.print(f"[yellow]note:[/yellow] the dead zone ({spec.actuator.dead_zone_V} V) is invisible to the "
-                      "linear design; the bench simulation includes it")
+    for note in design_notes(d):
+        console.print(f"[yellow]note:[/yellow] {note}")
     g = Table(title="LQR gain (u = -K x, force in N)", title_justify="left")
     g.add_column("state")
     g.add_column("Q", justify="right")

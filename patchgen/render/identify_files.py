@@ -1,8 +1,10 @@
 """Every file identify writes, as name -> bytes for the all-or-nothing writer
 (patchgen.render.outputs.write_files): bench.toml, plant.toml, report.md, report.json and a fit
-plot per recording."""
+plot per recording; and identify on the terminal."""
 
 from __future__ import annotations
+
+import click
 
 from patchgen.identify.identify import Identification
 from patchgen.identify.profile import bench_toml, plant_toml
@@ -47,3 +49,15 @@ def identify_files(result: Identification, files: list[str], base: BenchProfile,
     out["report.md"] = report_markdown(result, files, plots).encode()
     out["report.json"] = report_json(result, files, plots).encode()
     return out
+
+
+def print_identification(result: Identification, written: list, out_dir: str) -> None:
+    """The warnings on stderr, then each identified figure with its 95 % interval (or where it came
+    from), and the files written."""
+    for w in result.warnings:
+        click.echo(f"warning: {w}", err=True)
+    for key, p in list(result.bench.items()) + list(result.plant.items()):
+        e = p.estimate
+        shown = p.value if isinstance(p.value, str) else f"{p.value:.5g}"
+        click.echo(f"{key:32} {shown:>12} {p.unit:9} " + (f"95 %: {e.low:.4g} to {e.high:.4g}" if e else p.origin))
+    click.echo(f"wrote {len(written)} files into {out_dir}")

@@ -5,21 +5,22 @@ from __future__ import annotations
 
 import math
 
-from patchgen.bench.prediction import STANDARD
-from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.spec_file import spec_toml
+from patchgen.pipeline.recommend import RecommendReport
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.render.bench_sheet import predicted_patch_files
 from patchgen.render.outputs import json_text
+from patchgen.render.patchfiles import PATCH_FILES
 from patchgen.render.sheet import SheetSection
-from patchgen.studies.candidate import Candidate, Recommendation
+from patchgen.studies.candidate import Recommendation
 from patchgen.studies.departures import grouped, value_text
 from patchgen.studies.ranking import ROUND_RUNS, TARGET
 from patchgen.studies.recommend import CORNER_RUNS, chosen_spec
 from patchgen.studies.robust import ALTERNATIVES, WHY_GAINS
 
 RECOMMENDED_SPEC = "recommended.toml"
+RECOMMEND_FILES = PATCH_FILES + ("recommendation.md", "recommendation.json", RECOMMENDED_SPEC)  # what it may write
 
 
 def table_rows(rec: Recommendation) -> list[dict]:
@@ -268,26 +269,15 @@ def why_section(rec: Recommendation, reference_V: float) -> SheetSection:
     return SheetSection("Why this patch", header, rows, note)
 
 
-def _reusable_runs(rec: Recommendation, best: Candidate) -> dict:
-    """The chosen candidate's runs of each standard scenario, for the sheet's bench prediction,
-    where the recommendation ran that very scenario from its own seed (run i depends on its seed
-    alone, so they are the prediction's runs)."""
-    done = {}
-    for sc in rec.scenarios:
-        if sc.name in STANDARD and sc == load_scenario(sc.name) and rec.seed_of(sc) == sc.seed:
-            done[sc.name] = best.results(sc.name)
-    return done
-
-
-def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: BenchProfile) -> dict[str, str]:
+def recommendation_files(report: RecommendReport, machine: MachineProfile, bench: BenchProfile) -> dict[str, str]:
     """The files recommend writes: recommendation.md and recommendation.json always; with a
     chosen candidate, its patch files (the bench prediction and 'Why this patch' on its sheet)
     and recommended.toml, its spec.
 
     Parameters
     ----------
-    rec : Recommendation
-        The ranked candidates.
+    report : RecommendReport
+        The ranked candidates, and the chosen one judged and predicted.
     machine, bench : MachineProfile, BenchProfile
         Those the recommendation was made on.
 
@@ -296,12 +286,12 @@ def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: Be
     dict
         File name -> text.
     """
-    best = rec.best
+    rec, best = report.recommendation, report.best
     files: dict[str, str] = {}
     if best is not None:
         sections = [s for s in (departures_section(rec), why_section(rec, machine.reference_V)) if s is not None]
-        files.update(predicted_patch_files(best.design, machine, bench, best.netlist, sections,
-                                           done=_reusable_runs(rec, best), corners=best.bench_study))
+        files.update(predicted_patch_files(best.design, machine, bench, best.netlist, report.prediction,
+                                           report.judged, sections))
         departs = "".join(f"\n  {line}" for line in grouped(best.departures))
         files[RECOMMENDED_SPEC] = spec_toml(chosen_spec(rec), (
             f"{rec.spec.name}, as patchgen recommend chose it on the {bench.id} bench: {best.label}.\n"
@@ -317,5 +307,6 @@ def recommendation_files(rec: Recommendation, machine: MachineProfile, bench: Be
         "corner_runs": CORNER_RUNS if rec.ranges else None, "robust": robust_text(rec) or None,
         "verdict": verdict_text(rec), "variants": list(rec.variants),
         "departures": [] if best is None else [d.as_dict() for d in best.departures],
-        "candidates": table_rows(rec)})
+        "candidates": table_rows(rec),
+        "prediction": None if report.prediction is None else report.prediction.summary()})
     return files

@@ -18,10 +18,10 @@ from patchgen.render.sheet import SheetSection
 from patchgen.render.swingup_files import compact_schedule_rows, output_files, patch_sheet_rows
 
 
-def swingup_files(report: SwingupReport, machine: MachineProfile, bench: BenchProfile, svg: bool,
-                  hold_runs: int) -> dict[str, bytes | str]:
-    """Every file of the command: the patch and its sheet with the pump-up schedule (the sheet's
-    hold predicted over ``hold_runs`` seeds), the plots, and manoeuvre.json (the report's summary)."""
+def swingup_files(report: SwingupReport, machine: MachineProfile, bench: BenchProfile,
+                  svg: bool) -> dict[str, bytes | str]:
+    """Every file of the command: the patch and its sheet with the pump-up schedule and the bench
+    prediction, the plots, and manoeuvre.json (the report's summary)."""
     d, m, F, strategy = report.design, report.manoeuvre, report.force_limit_N, report.plan.strategy
     p = m.pump
     section = SheetSection(f"Pump-up schedule ({strategy}, {F:g} N)", *compact_schedule_rows(p),
@@ -31,7 +31,7 @@ def swingup_files(report: SwingupReport, machine: MachineProfile, bench: BenchPr
     title = (f"{d.spec.name}: {strategy} pump-up, hand-off at {p.handoff_time or float('nan'):.2f} s, "
              "patched hold")
     job = plot_helper.submit(pump_and_manoeuvre_files, p, m, title, svg)
-    files = predicted_patch_files(d, machine, bench, report.netlist, [section], runs_hold=hold_runs)
+    files = predicted_patch_files(d, machine, bench, report.netlist, report.prediction, report.judged, [section])
     files.update(job.result())
     files["manoeuvre.json"] = json_text(report.summary())
     return files

@@ -134,7 +134,7 @@ def allocate(label: str, kind: str, sp: DesignSpec, machine: MachineProfile, ben
             label = f"{label} ({net.units} slaved units)"
         except InputError as exc2:
             return Candidate(label, kind, sp, d, None, exc2.message)
-    plant = plant_params(d.spec)
+    plant = d.plant
     loop = diagnose(net, plant, bench)[-1]
     return Candidate(label, kind, sp, d, net, None, _detail(d), loop.verdict, loop.line(),
                      bench_margins(net, plant, bench))
@@ -150,7 +150,7 @@ def extra_candidates(spec: DesignSpec, machine: MachineProfile, bench: BenchProf
     c = allocate(f"{robust.LABEL}, {spec.estimator.kind.replace('_', ' ')}", spec.estimator.kind, choice.spec,
                  machine, bench)
     same = (c.netlist is not None and c.netlist == choice.netlist
-            and plant_params(c.design.spec) == plant_params(choice.spec))
+            and c.design.plant == plant_params(choice.spec))
     return [replace(c, robust_note=choice.detail(), searched=choice.studies if same else ())]
 
 
@@ -210,7 +210,7 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
     Candidate
         ``c`` with its outcomes.
     """
-    plant = plant_params(c.design.spec)
+    plant = c.design.plant
     runs_of = {sc.name: [] for sc in scenarios}
     swing = {sc.name: 0.0 for sc in scenarios}
     done = 0

@@ -24,7 +24,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 from patchgen.design.lqg import design_on
-from patchgen.design.model import plant_params
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
 from patchgen.inputs.spec import DesignSpec
@@ -169,7 +168,7 @@ def search(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scena
         worst, room, studies = None, 0.0, []
         for sc in order:
             held = SEARCH_RUNS if worst is None else worst[1].outcome.held
-            st = study(net, plant_params(d.spec), bench, machine, sc, seed=seed, corner_runs=SEARCH_RUNS,
+            st = study(net, d.plant, bench, machine, sc, seed=seed, corner_runs=SEARCH_RUNS,
                        stop=lambda done, h=held, r=room, b=best_key: beaten(_rank(done, h, r), b))
             studies.append(st)
             w = st.worst_corner

@@ -23,13 +23,12 @@ from patchgen.bench.circuit import compile_circuit
 from patchgen.bench.configure import engine_config
 from patchgen.bench.engine import draw_batch, run_batch
 from patchgen.bench.noise import ZIGGURAT_EDGES, philox, run_normals
-from patchgen.cli.design import design_from_path
 from patchgen.design.model import plant_params
 from patchgen.inputs.scenario import Scenario, load_scenario
 from patchgen.patch.build import build_patch
 from patchgen.plant.compiled import sincos
 from patchgen.profiles.bench import load_bench
-from tests.conftest import ROOT, design_path
+from tests.conftest import ROOT, design_from_path, design_path
 
 from .engine_reference import reference_runs
 

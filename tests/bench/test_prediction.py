@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from patchgen.bench.prediction import STANDARD, Prediction, diagnosis_note, predict, prediction_rows
+from patchgen.bench.diagnosis import diagnose
+from patchgen.bench.prediction import STANDARD, Prediction, predict
 from patchgen.bench.results import Overload, RunSummary
 from patchgen.bench.simulate import simulate
 from patchgen.design.lqg import design_on
@@ -13,8 +14,10 @@ from patchgen.design.model import plant_params
 from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.spec import load_spec
 from patchgen.patch.build import build_patch
+from patchgen.pipeline.prediction import BenchPrediction
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
+from patchgen.render.bench_sheet import diagnosis_note, failure_banner, prediction_rows
 
 GP6 = load_machine("gp6")
 BENCH = load_bench("uw-1991")
@@ -72,7 +75,21 @@ def test_rows_are_the_sheet_text():
 
 def test_diagnosis_note_gives_both_actuators_verdicts(patch):
     net, plant = patch
-    note = diagnosis_note(net, plant, BENCH)
+    pred = BenchPrediction((), tuple(diagnose(net, plant, BENCH)), None, 1)
+    note = diagnosis_note(pred)
     assert note.startswith("Linearised: wired loop with the ideal actuator (pure gain K_U): stable")
     assert "; wired loop with the bench actuator (lag 0.2 s): stable (rightmost pole -0." in note
     assert note.endswith(" 1/s).") and "UNSTABLE" not in note
+
+
+def test_the_banner_names_each_failing_scenario(patch):
+    net, plant = patch
+    loops = tuple(diagnose(net, plant, BENCH))
+    held = Prediction("hold-120s", "hold", 20, 0.95, None, None, 1.0, 0.1, "none")
+    failed = Prediction("step-cart", "step", 20, 0.9, None, 3.0, 45.0, 0.5, "A7")
+    assert BenchPrediction((held,), loops, None, 20).holds
+    assert failure_banner("uw-1991", BenchPrediction((held,), loops, None, 20)) == ""
+    pred = BenchPrediction((held, failed), loops, None, 20)
+    assert not pred.holds and pred.failing == (failed,)
+    assert failure_banner("uw-1991", pred) == ("Predicted to fail on the uw-1991 bench: held in step-cart 90 % of "
+                                               "runs. See 'Predicted on the bench'.")

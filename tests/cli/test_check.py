@@ -11,12 +11,11 @@ import pytest
 from click.testing import CliRunner
 
 from patchgen.cli import cli
-from patchgen.cli.design import design_from_path
 from patchgen.patch.build import build_patch
 from patchgen.patch.fault_finding import diagnose_readings, predict
 from patchgen.patch.readings import reading_limit_V
 from patchgen.patch.static_check import static_check, wires_of
-from tests.conftest import design_path
+from tests.conftest import design_from_path, design_path
 
 
 @pytest.fixture(scope="module")
@@ -81,6 +80,11 @@ def test_a_wrong_patch_names_its_fault_first(patched, tmp_path, fault, expect):
     assert rep["faults"][0]["description"].startswith(expect), rep["faults"][:3]
     text = _check(_filled(path, readings, tmp_path, "again.csv"))
     assert text.exit_code == 1 and expect in text.output
+    # what the terminal says is in the JSON: the count of readings disagreeing, and whether more
+    # than one fault explains them all
+    assert f"{len(rep['mismatched'])} of {rep['readings']} readings disagree" in text.output
+    assert rep["readings"] == len(check.readings)
+    assert rep["ambiguous"] == ("more than one fault explains" in " ".join(text.output.split()))
 
 
 def _last_field(text, value):

@@ -8,12 +8,11 @@ import sys
 import pytest
 
 from patchgen.bench.diagnosis import diagnose
-from patchgen.cli.design import design_from_path
 from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.profiles.bench import load_bench
 from tests.cli_run import run_patchgen
-from tests.conftest import ROOT, design_path
+from tests.conftest import ROOT, design_from_path, design_path
 
 pytestmark = pytest.mark.heavy(7)  # seconds, roughly: see tests/conftest.py
 

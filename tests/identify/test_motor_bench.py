@@ -34,7 +34,7 @@ def fitted(tmp_path_factory):
 
 
 def _true_plant():
-    from patchgen.cli.inputs import load_inputs
+    from patchgen.pipeline.inputs import load_inputs
 
     return plant_params(load_inputs("quanser-ip02")[0])
 

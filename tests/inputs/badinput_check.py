@@ -24,10 +24,10 @@ def check_argv(path: str = READ, *extra: str) -> tuple[str, ...]:
 @functools.cache
 def good_readings() -> str:
     """bench-recommended's static-check.csv with measured_V = expected_V on every row."""
-    from patchgen.cli.inputs import load_inputs
     from patchgen.design.lqg import design_on
     from patchgen.patch.build import build_patch
     from patchgen.patch.static_check import static_check, static_check_csv
+    from patchgen.pipeline.inputs import load_inputs
 
     sp, machine, bench = load_inputs("bench-recommended")
     net = build_patch(design_on(sp, machine, bench), machine)

@@ -4,11 +4,10 @@ import json
 
 import pytest
 
-from patchgen.cli.design import design_from_path
 from patchgen.inputs.spec import load_spec
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import SCHEMA_ID, Netlist, json_schema
-from tests.conftest import ROOT, design_path
+from tests.conftest import ROOT, design_from_path, design_path
 from tests.golden import assert_matches, outputs_and_spreads
 
 

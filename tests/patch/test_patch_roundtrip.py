@@ -7,7 +7,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from patchgen.cli.design import design_from_path
 from patchgen.design.lqg import design, design_on
 from patchgen.inputs.errors import ResourceError
 from patchgen.inputs.spec import DesignSpec, check_spec
@@ -16,7 +15,7 @@ from patchgen.patch.netlist import SCHEMA_ID, Netlist
 from patchgen.patch.readback import wired_law
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
-from tests.conftest import design_path
+from tests.conftest import design_from_path, design_path
 
 
 def design_law_volts(d, net: Netlist):

@@ -7,7 +7,6 @@ import pytest
 from patchgen.bench.circuit import compile_circuit
 from patchgen.bench.configure import engine_config
 from patchgen.bench.noise_drift import noise_and_drift
-from patchgen.cli.design import design_from_path
 from patchgen.inputs.errors import ResourceError
 from patchgen.inputs.scenario import Scenario
 from patchgen.patch.build import build_patch
@@ -19,7 +18,7 @@ from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import IntegratorMode, load_machine
 from patchgen.render.patchfiles import patch_files
 from patchgen.spice.deck import SpiceSettings, spice_deck
-from tests.conftest import design_path
+from tests.conftest import design_from_path, design_path
 from tests.patch.test_patch_roundtrip import check_roundtrip
 
 THAT = load_machine("the-analog-thing")

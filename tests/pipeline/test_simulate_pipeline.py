@@ -14,6 +14,7 @@ from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.spec import load_spec
 from patchgen.patch.build import build_patch
+from patchgen.pipeline.inputs import Inputs
 from patchgen.pipeline.simulate import SimulatePlan, run_simulate
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
@@ -28,7 +29,7 @@ def inputs():
 
 def test_the_report_carries_the_linear_verdicts(inputs):
     spec, machine, bench = inputs
-    report = run_simulate(spec, machine, bench, load_scenario("finger-push"), SimulatePlan(runs=3))
+    report = run_simulate(Inputs(spec, machine, bench), load_scenario("finger-push"), SimulatePlan(runs=3))
     d = design_on(spec, machine, bench)
     want = diagnose(build_patch(d, machine), plant_params(d.spec), bench)
     summary = report.summary()
@@ -41,7 +42,7 @@ def test_the_report_carries_the_linear_verdicts(inputs):
 def test_a_bench_spread_without_ranges_is_refused(inputs):
     spec, machine, bench = inputs
     with pytest.raises(InputError, match="no \\[uncertainty\\] ranges"):
-        run_simulate(spec, machine, bench, load_scenario("finger-push"), SimulatePlan(bench_spread=True))
+        run_simulate(Inputs(spec, machine, bench), load_scenario("finger-push"), SimulatePlan(bench_spread=True))
 
 
 def test_summary_json_and_json_output_are_the_report(tmp_path):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 from patchgen.inputs.spec import load_spec
+from patchgen.pipeline.inputs import Inputs
 from patchgen.pipeline.swingup import SwingupPlan, run_swingup
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
@@ -14,7 +15,7 @@ from tests.cli_run import run_patchgen
 
 def test_the_report_holds_the_manoeuvre_and_its_verdicts():
     spec = load_spec("bench-recommended")
-    report = run_swingup(spec, load_machine(spec.machine), load_bench(spec.bench), SwingupPlan(hold_s=5.0))
+    report = run_swingup(Inputs(spec, load_machine(spec.machine), load_bench(spec.bench)), SwingupPlan(hold_s=5.0))
     s = report.summary()
     m = report.manoeuvre
     assert s["reached_zone"] == m.pump.reached and s["held"] == m.held and s["hold_s"] == 5.0

@@ -11,7 +11,6 @@ from click.testing import CliRunner
 from patchgen.bench.prediction import STANDARD
 from patchgen.bench.simulate import simulate
 from patchgen.cli import cli
-from patchgen.cli.design import design_from_path
 from patchgen.design.lqg import design, design_on, loop_with_controller
 from patchgen.design.model import plant_params
 from patchgen.design.observer import reduced_observer
@@ -23,7 +22,7 @@ from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
 from patchgen.render.recommendation_files import table_rows
 from patchgen.studies.recommend import Candidate, Recommendation, recommend
-from tests.conftest import ROOT, design_path
+from tests.conftest import ROOT, design_from_path, design_path
 from tests.patch.test_patch_roundtrip import check_roundtrip
 
 pytestmark = pytest.mark.heavy(25)  # seconds, roughly: see tests/conftest.py

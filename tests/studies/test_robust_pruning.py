@@ -42,9 +42,8 @@ def _corner(bench) -> tuple:
 def _fake_bench(monkeypatch, seed: int) -> list:
     """Replace design, patch and simulation by the table; returns the list of simulations run."""
     points, ran = iter(range(10 ** 6)), []
-    monkeypatch.setattr(robust, "design_on", lambda sp, machine, bench: SimpleNamespace(spec=sp))
+    monkeypatch.setattr(robust, "design_on", lambda sp, machine, bench: SimpleNamespace(spec=sp, plant=None))
     monkeypatch.setattr(robust, "build_patch", lambda d, machine, units: SimpleNamespace(point=next(points)))
-    monkeypatch.setattr(robust, "plant_params", lambda spec: None)
 
     def simulate(net, plant, bench, machine, scenario, *, runs, **_):
         held, excursion = _table(seed, net.point, scenario.name, _corner(bench))

@@ -5,13 +5,12 @@ import json
 import numpy as np
 import pytest
 
-from patchgen.cli.design import design_from_path
 from patchgen.design.model import plant_params
 from patchgen.patch.build import build_patch
 from patchgen.profiles.bench import load_bench
 from patchgen.swingup.manoeuvre import manoeuvre
 from tests.cli_run import run_patchgen
-from tests.conftest import design_path
+from tests.conftest import design_from_path, design_path
 
 pytestmark = pytest.mark.heavy(6)  # seconds, roughly: see tests/conftest.py
 

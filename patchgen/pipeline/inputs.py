@@ -1,8 +1,10 @@
-"""A command's inputs, read and checked before anything is computed: the spec and the profiles
-it names, the scenario (inside the spec's track, within the simulation bounds), and the output
-folder's pre-flight (patchgen.render.outputs.check_out_dir)."""
+"""What a run needs, read and checked once before anything is computed: the spec and the machine
+and bench profiles it names (one ``Inputs``), and each scenario (inside the spec's track, within
+the simulation bounds). Every pipeline function takes them resolved; no stage reads them again."""
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 from patchgen.bench import budget
 from patchgen.inputs.errors import InputError
@@ -14,14 +16,31 @@ from patchgen.profiles.machine import MachineProfile, load_machine
 MAX_SPICE_POINTS = 10**6  # transient points of an ngspice run (duration / --step)
 
 
-def load_inputs(path: str, bench: str | None = None) -> tuple[DesignSpec, MachineProfile, BenchProfile]:
-    """The spec and the machine and bench profiles it names, each fully checked; ``bench`` (a
-    shipped id or a path, from ``--bench``) replaces the spec's bench."""
+class Inputs(NamedTuple):
+    """A spec and the machine and bench it runs on, each loaded and checked."""
+
+    spec: DesignSpec
+    machine: MachineProfile
+    bench: BenchProfile
+
+
+def load_inputs(path: str, bench: str | None = None, bench_source_name: str = "bench") -> Inputs:
+    """The spec and the machine and bench profiles it names, each fully checked.
+
+    Parameters
+    ----------
+    path : str
+        A spec file or a shipped design's name.
+    bench : str, optional
+        A bench profile (a shipped id or a path) replacing the spec's.
+    bench_source_name : str
+        What ``bench`` is called in an error about it (the option that gave it).
+    """
     spec = load_spec(path)
-    name, source, field = (bench, "--bench", "") if bench is not None else (spec.bench, spec.path, "bench")
+    name, source, field = (bench, bench_source_name, "") if bench is not None else (spec.bench, spec.path, "bench")
     profile = load_bench(name, source, field)
     check_reads(profile, spec.sensors.read(), bench_source(name, source, field))
-    return spec, load_machine(spec.machine, spec.path), profile
+    return Inputs(spec, load_machine(spec.machine, spec.path), profile)
 
 
 def scenario_for(path: str, spec: DesignSpec, runs: int = 1, ideal: bool = False) -> Scenario:
@@ -42,5 +61,5 @@ def check_spice_points(sc: Scenario, step_s: float) -> None:
     """An ngspice transient of at most MAX_SPICE_POINTS output points."""
     points = sc.duration_s / step_s
     if points > MAX_SPICE_POINTS:
-        raise InputError("--step", "", f"{sc.duration_s:g} s of {sc.path} at {step_s:g} s is {points:.3g} points; "
+        raise InputError("step_s", "", f"{sc.duration_s:g} s of {sc.path} at {step_s:g} s is {points:.3g} points; "
                                        f"at most {MAX_SPICE_POINTS:.0e} (a larger --step)")

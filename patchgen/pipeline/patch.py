@@ -1,0 +1,65 @@
+"""patchgen patch as one function: the spec designed, scaled and allocated on its machine, the
+patch judged as patched on the bench, and its bench prediction for the sheet."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from patchgen.bench.diagnosis import as_patched_on_bench
+from patchgen.design.lqg import Design, design_on
+from patchgen.patch.as_patched import AsPatched
+from patchgen.patch.build import build_patch
+from patchgen.patch.netlist import Netlist
+from patchgen.pipeline.inputs import Inputs
+from patchgen.pipeline.prediction import HOLD_RUNS, BenchPrediction, predict_on_bench
+
+
+@dataclass(frozen=True)
+class PatchPlan:
+    """Noise seeds of the sheet's long hold, and whether to predict the bench at all."""
+
+    runs_hold: int = HOLD_RUNS
+    predict: bool = True
+
+
+@dataclass(frozen=True)
+class PatchReport:
+    """The design, its patch, the patch judged as patched (design model and bench), and its bench
+    prediction (None when not asked for)."""
+
+    design: Design
+    netlist: Netlist
+    judged: AsPatched
+    prediction: BenchPrediction | None
+
+    def summary(self) -> dict:
+        """The patch's amplifiers, notes, margins as patched and the bench prediction, as plain data
+        (``--json`` adds the pot table and the files written, which render words)."""
+        net = self.netlist
+        return {"design": net.design, "machine": net.machine, "units": net.units,
+                "amplifiers": [{"id": a.id, "role": a.role, "carries": a.carries.model_dump()}
+                               for a in net.amplifiers],
+                "notes": net.notes, "margins": self.judged.as_dict(),
+                "prediction": None if self.prediction is None else self.prediction.summary()}
+
+
+def run_patch(inputs: Inputs, plan: PatchPlan = PatchPlan()) -> PatchReport:
+    """Design, scale and allocate the spec on its machine; judge the patch as patched; predict it.
+
+    Parameters
+    ----------
+    inputs : Inputs
+        The spec, machine and bench, resolved and checked.
+    plan : PatchPlan
+        The long hold's seeds, and whether to predict.
+
+    Returns
+    -------
+    PatchReport
+    """
+    spec, machine, bench = inputs
+    d = design_on(spec, machine, bench)
+    net = build_patch(d, machine)
+    judged = as_patched_on_bench(d, net, machine, bench)
+    pred = predict_on_bench(d, net, machine, bench, plan.runs_hold) if plan.predict else None
+    return PatchReport(d, net, judged, pred)

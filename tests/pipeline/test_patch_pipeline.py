@@ -1,0 +1,35 @@
+"""patchgen patch's pipeline function: the patch it returns is the stages' own, and its bench
+prediction is the simulator's, scenario for scenario."""
+
+from __future__ import annotations
+
+from patchgen.bench.diagnosis import diagnose
+from patchgen.bench.prediction import predict
+from patchgen.design.lqg import design_on
+from patchgen.patch.build import build_patch
+from patchgen.pipeline.inputs import load_inputs
+from patchgen.pipeline.patch import PatchPlan, run_patch
+
+
+def test_the_report_is_the_stages_patch_and_prediction():
+    inputs = load_inputs("bench-recommended")
+    spec, machine, bench = inputs
+    bare = run_patch(inputs, PatchPlan(predict=False))
+    net = build_patch(design_on(spec, machine, bench), machine)
+    assert bare.netlist == net and bare.prediction is None
+    assert bare.summary()["prediction"] is None and bare.summary()["margins"] == bare.judged.as_dict()
+    report = run_patch(inputs, PatchPlan(runs_hold=3))
+    pred = report.prediction
+    assert report.netlist == net and pred.runs_hold == 3 and pred.corners is None  # uw-1991 states no ranges
+    assert pred.predictions == tuple(predict(net, report.design.plant, bench, machine, runs_hold=3))
+    assert [lp.verdict for lp in pred.loops] == [lp.verdict for lp in diagnose(net, report.design.plant, bench)]
+    assert pred.holds == (pred.loops[-1].verdict == "stable" and all(p.fraction_held >= 0.95
+                                                                      for p in pred.predictions))
+
+
+def test_a_bench_with_ranges_is_predicted_at_its_corners_too():
+    inputs = load_inputs("bench-recommended", "uw-1991-uncertain")
+    pred = run_patch(inputs, PatchPlan(runs_hold=2)).prediction
+    assert pred.corners is not None and pred.corners.scenario == "hold-120s"
+    assert set(pred.corners.ranges) == set(inputs.bench.uncertainty.ranges) or pred.corners.at_nominal
+    assert pred.summary()["bench_spread"] == pred.corners.as_dict()

@@ -117,7 +117,15 @@ def draw(spread: BenchSpread, rng: np.random.Generator) -> np.ndarray:
 def apply(spread: BenchSpread, values: np.ndarray, actuator: np.ndarray, gains: np.ndarray,
           noise_std: np.ndarray) -> None:
     """Write one run's drawn values into its rows of the engine's arrays (in place)."""
-    for v, tgt in zip(values, spread.target):
+    apply_values(spread, dict(zip(spread.keys, values)), actuator, gains, noise_std)
+
+
+def apply_values(spread: BenchSpread, values: dict[str, float], actuator: np.ndarray, gains: np.ndarray,
+                 noise_std: np.ndarray) -> None:
+    """Write some keys' values (key -> value, each one of ``spread.keys``) into one run's rows of
+    the engine's arrays (in place), as :func:`apply` writes a draw; the keys not given keep theirs."""
+    for key, v in values.items():
+        tgt = spread.target[spread.keys.index(key)]
         if tgt[0] == "actuator":
             actuator[tgt[1]] = v
         elif tgt[0] == "gain":

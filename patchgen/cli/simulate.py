@@ -32,8 +32,8 @@ SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "his
 @click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters --spread draws.")
 @bench_option()
 @click.option("--bench-spread", is_flag=True, help="Monte Carlo over the bench too: each run draws the bench's "
-              "parameters from the profile's [uncertainty] ranges; the summary adds every corner of the ranges "
-              "and the worst.")
+              "parameters from the profile's [uncertainty] ranges; the summary adds the corners of the ranges "
+              "and the worst (searched for past three ranges).")
 @click.option("--corner-runs", type=click.IntRange(1, 100_000), default=None,
               help="Runs at each corner of the bench's ranges with --bench-spread [default: --runs].")
 @svg_option("the plot (history.svg)")

@@ -103,7 +103,7 @@ def ranges_note(st: BenchStudy) -> str:
     rest = (f" (the corners take the {MAX_CORNER_PARAMETERS} widest ranges; at the profile's value: "
             + ", ".join(st.at_nominal) + ")") if st.at_nominal else ""
     return (f"Predicted over the bench's ranges ({st.distribution}: {ranges}): every run above drew its bench from "
-            f"them. At every corner of the ranges in {st.scenario}{rest}, the worst corner held "
+            f"them. At {st.how()}{rest}, the worst corner held "
             f"{w.held_text()}.")
 
 

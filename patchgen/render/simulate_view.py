@@ -10,7 +10,7 @@ from rich.table import Table
 
 from patchgen.bench.results import SimResult
 from patchgen.pipeline.simulate import SimulateReport
-from patchgen.studies import bench_corners
+from patchgen.studies import bench_corners, worst_case
 
 
 def progress_bar(name: str, runs: int, quiet: bool):
@@ -70,7 +70,8 @@ def summary_table(result: SimResult) -> Table:
 
 
 def corner_table(st: bench_corners.BenchStudy) -> Table:
-    """The held fraction over drawn benches, at every corner of the ranges, and the worst corner."""
+    """The held fraction over drawn benches, at the corners of the ranges (every one, or the harshest
+    the search found), and the worst corner."""
     ranges = ", ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in st.ranges.items())
     t = Table(title=f"over the bench's ranges ({st.distribution}: {ranges}); held = up, inside the switches, "
               "no overload", title_justify="left")
@@ -87,6 +88,8 @@ def corner_table(st: bench_corners.BenchStudy) -> Table:
     w = st.worst_corner
     for c in st.corners:
         row(("worst corner: " if c is w else "corner: ") + c.label(), c.outcome)
+    if st.screened:
+        t.add_row(f"searched: {st.screened} points screened with {worst_case.SCREEN_RUNS} seeds each", "", "")
     if st.at_nominal:
         t.add_row(f"at the profile's value in the corners (past {bench_corners.MAX_CORNER_PARAMETERS} ranges): "
                   + ", ".join(st.at_nominal), "", "")

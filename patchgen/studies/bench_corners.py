@@ -6,9 +6,10 @@ A run *holds* as recommend counts it (patchgen.studies.ranking.outcome): up, ins
 and no amplifier past the rails for the whole scenario. Every corner and every end runs the same
 seeds (run i of the Monte Carlo's seed), so corners differ by the bench alone.
 
-A box of k ranges has 2^k corners; past MAX_CORNER_PARAMETERS ranges only the widest (relative to
-their nominal value) are taken to their corners and the rest stay at the profile's values, and the
-study says which.
+A box of k ranges has 2^k corners: up to patchgen.studies.worst_case.EXACT_RANGES ranges every
+corner is run; past that the worst corner is searched for (patchgen.studies.worst_case), every
+range taking part, and the study says how many points it screened. Points run together go to the
+engine as one batch (patchgen.bench.points), on every core.
 """
 
 from __future__ import annotations
@@ -20,15 +21,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from patchgen.bench.bench_spread import active_ranges
+from patchgen.bench.points import simulate_points
+from patchgen.bench.results import RunSummary
 from patchgen.bench.simulate import SimResult, simulate
 from patchgen.inputs.scenario import Scenario
 from patchgen.patch.netlist import Netlist
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile, bench_at, nominal
 from patchgen.profiles.machine import MachineProfile
+from patchgen.studies import worst_case
 from patchgen.studies.ranking import ScenarioOutcome, outcome
 
-MAX_CORNER_PARAMETERS = 6  # 64 corners
+MAX_CORNER_PARAMETERS = 6  # 64 corners: corner_values's cap (the study itself searches past EXACT_RANGES)
 
 
 @dataclass(frozen=True)
@@ -66,6 +70,16 @@ class BenchStudy:
     corners: tuple[CornerOutcome, ...]
     at_nominal: tuple[str, ...]  # ranges left at the profile's value in the corners (past the cap)
     ends: tuple[CornerOutcome, ...] = ()
+    screened: int = 0  # points screened by the search for the worst corner (0: every corner run)
+
+    def how(self) -> str:
+        """How the corners were chosen, in words: every corner, or the search and its cost."""
+        if not self.screened:
+            return f"every corner of the ranges in {self.scenario}"
+        runs = self.corners[0].outcome.runs if self.corners else 0
+        return (f"the corners of the ranges in {self.scenario}, the worst searched for ({self.screened} points "
+                f"screened with {worst_case.SCREEN_RUNS} seeds each, the {len(self.corners)} harshest run again "
+                f"with {runs})")
 
     @property
     def worst_corner(self) -> CornerOutcome | None:
@@ -89,7 +103,9 @@ class BenchStudy:
                 "corners": [c.as_dict() for c in self.corners], "corners_at_nominal": list(self.at_nominal),
                 "worst_corner": None if w is None else w.as_dict(),
                 "ends": [c.as_dict() for c in self.ends],
-                "weakest_parameter": None if p is None else p.as_dict()}
+                "weakest_parameter": None if p is None else p.as_dict(),
+                "searched": {"screened": self.screened, "screen_runs": worst_case.SCREEN_RUNS} if self.screened
+                else None}
 
 
 def cart_excursion(c: CornerOutcome) -> float:
@@ -111,10 +127,10 @@ def corner_values(bench: BenchProfile, ranges: dict[str, tuple[float, float]],
     return [dict(zip(keys, ends)) for ends in itertools.product(*(ranges[k] for k in keys))], rest
 
 
-def _worst_swing(res: SimResult, saturation_V: float) -> float:
+def _worst_swing(runs: Sequence[RunSummary], saturation_V: float) -> float:
     """The largest |u_c| of the runs (the rails when any overloaded)."""
-    swing = max([0.0] + [r.max_abs_u_c_V for r in res.runs])
-    return saturation_V if any(r.overloads for r in res.runs) else swing
+    swing = max([0.0] + [r.max_abs_u_c_V for r in runs])
+    return saturation_V if any(r.overloads for r in runs) else swing
 
 
 def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, scenario: Scenario,
@@ -157,9 +173,21 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
     BenchStudy
     """
     ranges = active_ranges(bench, ideal, scenario.noise.mode == "profile")
+    sat = machine.imperfections.saturation_V
+    counted = None if drawn is None else outcome(scenario.name, drawn.runs, _worst_swing(drawn.runs, sat))
+
+    def counted_at(values: dict, runs: list[RunSummary]) -> CornerOutcome:
+        return CornerOutcome(values, outcome(scenario.name, runs, _worst_swing(runs, sat)))
+
+    if len(ranges) > worst_case.EXACT_RANGES:
+        confirmed, screened_ends, screened = worst_case.search(
+            net, plant, bench, machine, scenario, ranges, seed=seed, corner_runs=corner_runs, ideal=ideal,
+            progress=progress)
+        return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
+                          tuple(counted_at(v, r) for v, r in confirmed), (),
+                          tuple(counted_at(v, r) for v, r in screened_ends) if ends else (), screened)
     corners, rest = corner_values(bench, ranges)
     singles = [{k: v} for k, r in ranges.items() for v in r] if ends else []
-    sat = machine.imperfections.saturation_V
     total, done = len(corners) + len(singles), 0
 
     def run(values):
@@ -175,13 +203,26 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
         done += 1
         if progress is not None:
             progress(done, total)
-        return CornerOutcome(values, outcome(scenario.name, res.runs, _worst_swing(res, sat)))
+        return counted_at(values, res.runs)
 
-    counted = None if drawn is None else outcome(scenario.name, drawn.runs, _worst_swing(drawn, sat))
+    if stop is None:  # every point at once: one batch, on every core
+        todo = [v for v in corners + singles if not any(k.values == v for k in known)]
+        ran = dict(zip(map(_frozen, todo), simulate_points(net, plant, bench, machine, scenario, todo, runs=corner_runs,
+                                                            seed=seed, ideal=ideal) if todo else []))
+        got = [next((k for k in known if k.values == v), None) or counted_at(v, ran[_frozen(v)])
+               for v in corners + singles]
+        if progress is not None:
+            progress(total, total)
+        return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
+                          tuple(got[:len(corners)]), rest, tuple(got[len(corners):]))
     done_corners = []
     for v in corners:
         done_corners.append(run(v))
-        if stop is not None and stop(done_corners):
+        if stop(done_corners):
             break
     return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
                       tuple(done_corners), rest, tuple(run(v) for v in singles))
+
+
+def _frozen(values: dict[str, float]) -> tuple:
+    return tuple(sorted(values.items()))

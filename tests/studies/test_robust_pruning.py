@@ -90,12 +90,16 @@ def test_a_study_takes_known_corners_as_they_are_and_runs_the_rest():
     fresh = bench_corners.study(net, plant, UNCERTAIN, GP6, push, corner_runs=8, ends=True)
     ran = []
     with pytest.MonkeyPatch.context() as mp:
-        real = bench_corners.simulate
-        mp.setattr(bench_corners, "simulate", lambda *a, **k: ran.append(a[2]) or real(*a, **k))
+        real = bench_corners.simulate_points
+        mp.setattr(bench_corners, "simulate_points", lambda *a, **k: ran.extend(a[5]) or real(*a, **k))
         again = bench_corners.study(net, plant, UNCERTAIN, GP6, push, corner_runs=8, ends=True,
                                     known=fresh.corners[:5])
     assert again.as_dict() == fresh.as_dict()
     assert len(ran) == len(fresh.corners) - 5 + len(fresh.ends)
+    assert not any(k.values in ran for k in fresh.corners[:5])
+    # run together or one at a time (as the robust search's pruned studies run them), the same figures
+    one_by_one = bench_corners.study(net, plant, UNCERTAIN, GP6, push, corner_runs=8, stop=lambda done: False)
+    assert one_by_one.corners == fresh.corners
 
 
 def test_the_robust_candidate_brings_its_corners_only_for_the_patch_they_were_run_on(monkeypatch):

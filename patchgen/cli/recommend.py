@@ -33,8 +33,8 @@ NONE_CHOSEN_STATUS = 1  # the comparison is written, but no realisation holds on
 @seed_option(None, "Base seed of every scenario (default: each scenario's own).")
 @click.option("--all-runs", is_flag=True, help="Run every realisation --runs times on every scenario (no early "
               "stop once a realisation clearly holds or fails).")
-@bench_option("when it states ranges for its parameters, every run draws its bench from them and every corner "
-              "is checked.")
+@bench_option("when it states ranges for its parameters, every run draws its bench from them and the worst "
+              "corner is checked.")
 @json_option("the comparison")
 @FORCE
 def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_name, as_json, force):

@@ -4,6 +4,8 @@ comparison, the chosen patch's pot table and notes, the verdict and the spec's d
 from __future__ import annotations
 
 import contextlib
+import re
+import time
 
 from rich.console import Console
 from rich.markup import escape
@@ -16,16 +18,41 @@ from patchgen.render.recommendation_files import corner_cell, fmt_figure, gm_cel
 from patchgen.studies.departures import grouped
 from patchgen.studies.recommend import Recommendation
 
+PLAIN_EVERY_S = 5.0  # piped, a progress line at most this often while the work is the same
+
 
 @contextlib.contextmanager
 def progress_bar():
-    """A bar on stderr over the Monte Carlo, and the callback recommend reports to (its label,
-    runs done and runs in all)."""
+    """What recommend is doing and how far, on stderr, and the callback recommend reports to (what
+    runs, runs done and runs in all; 0 in all: not known yet): a bar in a terminal; piped, a line
+    when the work changes and at most every PLAIN_EVERY_S seconds."""
+    console = Console(stderr=True)
+    if not console.is_terminal:
+        yield _PlainProgress(console)
+        return
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  console=Console(stderr=True), transient=True) as bar:
-        task = bar.add_task("Monte Carlo", total=None)
-        yield lambda label, done, total: bar.update(task, description=f"Monte Carlo: {label}", completed=done,
-                                                    total=total)
+                  console=console, transient=True) as bar:
+        task = bar.add_task("recommend", total=None)
+        yield lambda label, done, total: bar.update(task, description=escape(label), completed=done,
+                                                    total=total or None)
+
+
+class _PlainProgress:
+    """Progress as plain lines, for a log or a pipe."""
+
+    def __init__(self, console: Console):
+        self.console, self.last, self.at, self.start = console, None, 0.0, time.monotonic()
+
+    def __call__(self, label: str, done: int, total: int) -> None:
+        now = time.monotonic()
+        work = re.sub(r", batch \d+ of \d+$", "", label)  # a new batch of the same work is no news
+        if work == self.last and now - self.at < PLAIN_EVERY_S:
+            return
+        self.last, self.at = work, now
+        runs = f", {done} of {total} runs" if total else ""
+        elapsed = int(now - self.start)
+        self.console.print(f"recommend [{elapsed // 60}:{elapsed % 60:02d}]: {label}{runs}", markup=False,
+                           highlight=False, soft_wrap=True)
 
 
 def print_recommendation(rec: Recommendation, machine: MachineProfile, name: str, runs: int, written: list,

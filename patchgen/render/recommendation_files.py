@@ -18,6 +18,7 @@ from patchgen.studies.departures import grouped, value_text
 from patchgen.studies.ranking import ROUND_RUNS, TARGET
 from patchgen.studies.recommend import CORNER_RUNS, chosen_spec
 from patchgen.studies.robust import ALTERNATIVES, WHY_GAINS
+from patchgen.studies.worst_case import CONFIRMED, EXACT_RANGES, SCREEN_RUNS
 
 RECOMMENDED_SPEC = "recommended.toml"
 RECOMMEND_FILES = PATCH_FILES + ("recommendation.md", "recommendation.json", RECOMMENDED_SPEC)  # what it may write
@@ -99,10 +100,10 @@ def robust_text(rec: Recommendation) -> str:
         used = (f"Against the dead zone and lag, the chosen patch's gains were chosen over the corners of the bench's "
                 f"ranges ({WHY_GAINS}): {b.robust_note}.")
     elif b is not None:
-        used = ("The chosen patch keeps the spec's gains: they held at every corner of the bench's ranges "
-                "at least as well as the gains chosen over the corners.")
+        used = ("The chosen patch keeps the spec's gains: they held at the worst corner of the bench's ranges, "
+                "so no gains were chosen over the corners.")
     else:
-        used = "No candidate held at every corner of the bench's ranges."
+        used = "No candidate held at the worst corner of the bench's ranges."
     return used + " Not used: " + "; ".join(ALTERNATIVES) + "."
 
 
@@ -144,11 +145,22 @@ def _ranges_text(rec: Recommendation) -> str:
         return ""
     ranges = ", ".join(f"{k} {lo:g} to {hi:g}" for k, (lo, hi) in rec.ranges.items())
     return (f" The bench states ranges ({rec.distribution}: {ranges}): every run drew its bench from them, so "
-            f"the held fractions are over that uncertainty. Each stable realisation was also run at every corner "
+            f"the held fractions are over that uncertainty. Each stable realisation was also run at the corners "
             f"of the ranges and at each end of each range (the others at the profile's values), {CORNER_RUNS} "
-            f"seeds each, in its weakest scenario: the worst corner's held fraction ranks right after the verdict, "
-            f"a realisation is chosen only if it held in at least {TARGET:.0%} of the runs at every corner, and "
-            f"the end held least (ties: the one taking the cart furthest) names its weakest parameter.")
+            f"seeds each, in its weakest scenario ({_corners_how(len(rec.ranges))}): the worst corner's held "
+            f"fraction ranks right after the verdict, a realisation is chosen only if it held in at least "
+            f"{TARGET:.0%} of the runs at its worst corner, and the end held least (ties: the one taking the cart "
+            f"furthest) names its weakest parameter. When none holds there, gains chosen over the corners join "
+            f"the realisations.")
+
+
+def _corners_how(k: int) -> str:
+    """How the corners of k ranges are run, in words."""
+    if k <= EXACT_RANGES:
+        return f"every one of the {2 ** k} corners"
+    return (f"{k} ranges have {2 ** k} corners, so the worst is searched for: the linearised loop at every corner, "
+            f"each end of each range and a descent over the corners screened with {SCREEN_RUNS} seeds, the "
+            f"{CONFIRMED} harshest run again with {CORNER_RUNS}; the ends at {SCREEN_RUNS} seeds")
 
 
 def verdict_text(rec: Recommendation) -> str:
@@ -158,8 +170,14 @@ def verdict_text(rec: Recommendation) -> str:
         w = best.weakest
         departs = (f" It departs from {rec.spec.name} in " + ", ".join(d.field for d in best.departures) + "."
                    if best.departures else "")
-        return (f"Chosen: {best.label}: wired loop stable on the bench, held in {w.fraction:.1%} of the runs of its "
-                f"weakest scenario ({w.scenario}, {w.held} of {w.runs}).{departs}")
+        lo, hi = w.interval
+        how = ("holds in every scenario" if best.decision == "holds" else
+               f"{best.decision}: its 95 % interval reaches below {TARGET:.0%} (more --runs would decide)")
+        st = best.bench_study
+        corner = "" if st is None or st.worst_corner is None else (
+            f"; at the worst corner of the bench's ranges it held {st.worst_corner.held_text()}")
+        return (f"Chosen: {best.label}: wired loop stable on the bench; {how}; its weakest scenario, {w.scenario}, "
+                f"held in {w.held} of {w.runs} runs ({w.fraction:.1%}, 95 %: {lo:.1%} to {hi:.1%}){corner}.{departs}")
     n = len(rec.variants)
     tried = "" if not n else " (nor in its one variant tried)" if n == 1 else f" (nor in any of the {n} variants tried)"
     stable = [c for c in rec.ranked if c.simulated and c.bench_loop == "stable"]

@@ -25,8 +25,10 @@ bench from them, so the held fractions are over the bench's uncertainty; each st
 also run at every corner of the ranges and at each end of each range in its weakest scenario
 (ties: the longest; CORNER_RUNS seeds each, patchgen.studies.bench_corners), which names its
 weakest parameter; the worst corner's held fraction ranks right after the verdict, and a candidate is chosen only if it
-held in at least TARGET of the runs at every corner. The candidates then include one whose gains
-are chosen over the corners (patchgen.studies.robust, added by ``extra_candidates``).
+held in at least TARGET of the runs at every corner. When none is chosen, one whose gains are
+chosen over the corners joins them (patchgen.studies.robust, ``extra_candidates``) before any
+variant of the spec: a search over weights costs a study per weight, worth it only when the spec's
+own realisations do not hold at their worst corner.
 
 When none of these is chosen, the spec's variants are tried (patchgen.studies.variants), each with
 every candidate above, a tier at a time, nearest first, until one is chosen. Every candidate carries
@@ -64,6 +66,7 @@ CANDIDATES = (
 )
 
 RUNS = 200  # the most noise seeds per candidate and scenario
+DESIGNING = "designing and allocating every realisation"  # the first thing progress hears
 CORNER_RUNS = 64  # seeds at each corner and each end of the bench's ranges
 
 def candidate_specs(spec: DesignSpec, bench: BenchProfile) -> list[tuple[str, str, DesignSpec]]:
@@ -141,10 +144,10 @@ def allocate(label: str, kind: str, sp: DesignSpec, machine: MachineProfile, ben
 
 
 def extra_candidates(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenarios: Sequence[Scenario],
-                     seed: int | None = None) -> list[Candidate]:
+                     seed: int | None = None, progress: Callable[[int, int], None] | None = None) -> list[Candidate]:
     """When the bench states ranges: the candidate whose gains (and integral action) are chosen
-    over the corners of the ranges (patchgen.studies.robust.search); none otherwise."""
-    choice = robust.search(spec, machine, bench, scenarios, seed)
+    over the corners of the ranges (patchgen.studies.robust.search, ``progress`` its); none otherwise."""
+    choice = robust.search(spec, machine, bench, scenarios, seed, progress)
     if choice is None:
         return []
     c = allocate(f"{robust.LABEL}, {spec.estimator.kind.replace('_', ' ')}", spec.estimator.kind, choice.spec,
@@ -179,7 +182,8 @@ def _swing(res, machine: MachineProfile) -> float:
 
 def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenarios: Sequence[Scenario],
              max_runs: int, seed: int | None, early_stop: bool = True,
-             progress: Callable[[int], None] | None = None) -> Candidate:
+             progress: Callable[[int], None] | None = None,
+             phase: Callable[[str, int, int], None] | None = None) -> Candidate:
     """The sequential Monte Carlo of one allocated candidate on the bench, every scenario.
 
     Rounds of ROUND_RUNS runs per scenario (run i of a scenario always draws from its seed and i,
@@ -204,6 +208,8 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
         Stop at a clear decision; False runs ``max_runs`` of every scenario.
     progress : callable, optional
         Called with the runs done so far (over every scenario).
+    phase : callable, optional
+        ``phase(what, done, total)`` while the corners of the bench's ranges run (batches).
 
     Returns
     -------
@@ -237,8 +243,9 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
         held = {o.scenario: (o.fraction, o.interval[1]) for o in outcomes}  # ties: the longest scenario
         weak = min(scenarios, key=lambda sc: (*held[sc.name], -sc.duration_s))
         searched = [s.corners for s in c.searched if s.scenario == weak.name and CORNER_RUNS == robust.SEARCH_RUNS]
+        where = (lambda d, t: phase(f"worst corner of the bench's ranges in {weak.name}", d, t)) if phase else None
         st = study(c.netlist, plant, bench, machine, weak, seed=seed, corner_runs=CORNER_RUNS, ends=True,
-                   known=searched[0] if searched else ())
+                   known=searched[0] if searched else (), progress=where)
     return replace(c, outcomes=outcomes, bench_study=st)
 
 
@@ -273,12 +280,18 @@ def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, sc
         The candidates ranked best first (see the module docstring), each with its departures
         from ``spec``.
     """
-    robust_why = {"weights": f"{robust.LABEL}: {robust.WHY_GAINS}", "integrators.int_s": robust.LABEL}
-    cands = [departed(c, spec, bench) for c in prepare(spec, machine, bench)]
-    cands += [departed(c, spec, bench, robust_why) for c in extra_candidates(spec, machine, bench, scenarios, seed)]
+    if progress is not None:
+        progress(DESIGNING, 0, 0)
     run = _Runner(bench, machine, scenarios, runs, seed, early_stop, progress)
-    done = run(cands)
+    done = run([departed(c, spec, bench) for c in prepare(spec, machine, bench)])
     rec = _ranked(spec, scenarios, runs, seed, done, bench)
+    if rec.best is None and bench.uncertainty.ranges:  # gains chosen over the corners, when none holds there
+        robust_why = {"weights": f"{robust.LABEL}: {robust.WHY_GAINS}", "integrators.int_s": robust.LABEL}
+        where = (lambda i, n: progress(f"{robust.LABEL}: weights {i} of {n} over the corners", run.base,
+                                       run.total)) if progress else None
+        done += run([departed(c, spec, bench, robust_why)
+                     for c in extra_candidates(spec, machine, bench, scenarios, seed, where)])
+        rec = _ranked(spec, scenarios, runs, seed, done, bench)
     if rec.best is not None:
         return rec
     below = any(variants.below_dial(c.design, machine) for c in done if c.netlist is not None)
@@ -317,19 +330,22 @@ class _Runner:
     def __init__(self, bench: BenchProfile, machine: MachineProfile, scenarios: Sequence[Scenario], runs: int,
                  seed: int | None, early_stop: bool, progress: Callable[[str, int, int], None] | None):
         self.args = (bench, machine, scenarios, runs, seed, early_stop)
-        self.progress, self.per, self.base = progress, runs * len(scenarios), 0
+        self.progress, self.per, self.base, self.total = progress, runs * len(scenarios), 0, 0
 
     def __call__(self, cands: list[Candidate]) -> list[Candidate]:
         bench, machine, scenarios, runs, seed, early_stop = self.args
         progress = self.progress
-        total = self.base + self.per * sum(c.netlist is not None for c in cands)
+        total = self.total = self.base + self.per * sum(c.netlist is not None for c in cands)
         done = []
         for c in cands:
             if c.netlist is None:
                 done.append(c)
                 continue
             cb = (lambda n, lab=c.label, b=self.base: progress(lab, b + n, total)) if progress else None
-            done.append(evaluate(c, bench, machine, scenarios, runs, seed, early_stop, cb))
+            after = self.base + self.per  # the candidate's Monte Carlo is over when its corners run
+            ph = (lambda what, d, t, lab=c.label, b=after: progress(f"{lab}: {what}, batch {d} of {t}", b, total)
+                  ) if progress else None
+            done.append(evaluate(c, bench, machine, scenarios, runs, seed, early_stop, cb, ph))
             self.base += self.per
             if progress is not None:
                 progress(c.label, self.base, total)

@@ -21,7 +21,7 @@ from patchgen.patch.netlist import read_netlist
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
 from patchgen.render.recommendation_files import table_rows
-from patchgen.studies.recommend import Candidate, Recommendation, recommend
+from patchgen.studies.recommend import DESIGNING, Candidate, Recommendation, recommend
 from tests.conftest import ROOT, design_from_path, design_path
 from tests.patch.test_patch_roundtrip import check_roundtrip
 
@@ -91,7 +91,10 @@ def test_ranking_is_deterministic_and_reports_progress():
     calls = []
     a = recommend(spec, m, b, sc, runs=6, progress=lambda *call: calls.append(call))
     c = recommend(spec, m, b, sc, runs=6)
-    # the command's progress bar: runs done over the most there can be, each candidate labelled
+    # the command's progress bar: what it is doing from the start, then runs done over the most
+    # there can be, each candidate labelled
+    assert calls[0] == (DESIGNING, 0, 0)
+    calls = calls[1:]
     fits = [x for x in a.ranked if x.netlist is not None]
     total = 6 * 2 * len(fits)
     assert {t for _, _, t in calls} == {total} and calls[-1][1] == total

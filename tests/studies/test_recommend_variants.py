@@ -141,13 +141,15 @@ def test_progress_runs_on_through_the_variants(tmp_path):
     from patchgen.inputs.scenario import load_scenario
     from patchgen.profiles.bench import load_bench
     from patchgen.profiles.machine import load_machine
-    from patchgen.studies.recommend import recommend
+    from patchgen.studies.recommend import DESIGNING, recommend
 
     p = tmp_path / "short.toml"
     p.write_text(design_path("bench-recommended").read_text().replace("d = 1.090", "d = 0.1"))
     calls = []
     rec = recommend(load_spec(p), load_machine("gp6"), load_bench("uw-1991"), (load_scenario("offset-10deg"),),
                     runs=40, progress=lambda *call: calls.append(call))
+    assert calls[0] == (DESIGNING, 0, 0)  # what it does before any run, then runs over their total
+    calls = calls[1:]
     done = [n for _, n, _ in calls]
     assert done == sorted(done) and all(n <= t for _, n, t in calls)
     totals = sorted({t for _, _, t in calls})

@@ -265,8 +265,9 @@ def design(spec: DesignSpec, bench: BenchProfile | None = None, *, plant: PlantP
         cl = np.linalg.eigvals(model.A - model.B @ K)
         lqr_m = loop_margins(model.A, model.B, K)
         zeros = {"s/F_U": plant_zeros(spec, "s"), "s_dot/F_U": plant_zeros(spec, "s_dot")}
+    redesign = lambda sp: design(sp, bench, plant=plant, default_rolloff_s=default_rolloff_s)
     with failing_as(spec.path, "estimator", f"the {spec.estimator.kind} estimator"):
-        est, ctl, lqg_m = _estimator(spec, bench, model, K, lqr_m, default_rolloff_s)
+        est, ctl, lqg_m = _estimator(spec, bench, model, K, lqr_m, default_rolloff_s, redesign)
     return Design(spec=spec, model=model, Q=Q, R=R, K=K, S=S, closed_loop_poles=_sort(cl),
                   open_loop_poles=open_loop_poles(model), zeros=zeros, lqr_margins=lqr_m, estimator=est,
                   controller=ctl, lqg_margins=lqg_m, spread=design_spread(spec, model, Q, R, est))
@@ -298,8 +299,9 @@ def design_on(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile | N
 
 
 def _estimator(spec: DesignSpec, bench: BenchProfile | None, model: LinearModel, K: np.ndarray, lqr_m: Margins,
-               default_rolloff_s: float | None) -> tuple[Estimator | None, Controller | None, Margins | None]:
-    """The spec's estimator, its controller and the loop margins with it (none: all None)."""
+               default_rolloff_s: float | None, redesign) -> tuple[Estimator | None, Controller | None, Margins | None]:
+    """The spec's estimator, its controller and the loop margins with it (none: all None);
+    ``redesign`` designs a changed spec as this one is (a refusal's suggestion is checked so)."""
     e = spec.estimator
     if e.kind == "kalman":
         return _kalman_estimator(spec, model, K, lqr_m)
@@ -319,7 +321,7 @@ def _estimator(spec: DesignSpec, bench: BenchProfile | None, model: LinearModel,
         if bench is None:
             raise ValueError(f"{spec.name}: a {e.kind} estimator is shaped for the bench's noise; pass the bench "
                              f"profile the spec names ({spec.bench!r}, patchgen.profiles.bench.load_bench)")
-        est, ctl = _noise_shaped_estimator(spec, bench, model, K)
+        est, ctl = _noise_shaped_estimator(spec, bench, model, K, redesign)
         return est, ctl, loop_margins(*loop_with_controller(model, ctl))
     return None, None, None
 
@@ -367,27 +369,32 @@ def _margins_at_rho1(spec: DesignSpec, model: LinearModel, K: np.ndarray) -> Mar
         return None
 
 
-def _noise_shaped_estimator(spec: DesignSpec, bench: BenchProfile, model: LinearModel, K: np.ndarray):
+def _noise_shaped_estimator(spec: DesignSpec, bench: BenchProfile, model: LinearModel, K: np.ndarray, redesign):
     """A filtered differentiator or a reduced observer, its speed from the spec or, when the spec
-    leaves it out, from the bench's noise levels (patchgen.design.corner)."""
+    leaves it out, from the bench's noise levels (patchgen.design.corner); a refusal names the
+    speed to set when a design with it passes (corner.way_forward, through ``redesign``)."""
     e = spec.estimator
     fixed = e.rolloff_s if e.kind == "filtered_differentiator" else e.observer_pole
     if e.kind == "filtered_differentiator":
         build = lambda r: differentiator_controller(model, K, r)
-        grid = corner.ROLLOFF_GRID_S
+        grid, field = corner.ROLLOFF_GRID_S, "estimator.rolloff_s"
     else:
         build = lambda p: reduced_observer_controller(model, K, reduced_observer(model, p))
-        grid = corner.POLE_GRID
+        grid, field = corner.POLE_GRID, "estimator.observer_pole"
     noise = corner.noise_model(spec, bench, model)
     if fixed is None:
-        try:
-            def robust(c):
-                mg = loop_margins(*loop_with_controller(model, c), gain_limits=False)
-                return mg.stable and mg.pm_deg is not None and mg.pm_deg >= corner.MIN_PM_DEG
+        def margin(c):
+            mg = loop_margins(*loop_with_controller(model, c), gain_limits=False)
+            return mg.pm_deg if mg.stable else None
 
-            value = corner.choose(model, K, build, noise, grid, robust).value
-        except ValueError as exc:
-            raise spec.error("estimator", str(exc)) from None
+        def margin_with(v):
+            mg = redesign(spec.changed(field, v)).lqg_margins
+            return mg.pm_deg if mg.stable else None
+
+        try:
+            value = corner.choose(model, K, build, noise, grid, margin).value
+        except corner.NoRobustSpeed as exc:
+            raise spec.error("estimator", str(exc), corner.way_forward(exc, field, margin_with)) from None
     else:
         value = float(fixed)
     try:

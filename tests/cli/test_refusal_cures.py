@@ -81,6 +81,30 @@ def test_a_suggested_speed_is_offered_only_once_its_design_passes():
     assert corner.way_forward(refused, "estimator.rolloff_s", lambda v: 20.0) is None
 
 
+def test_a_patch_short_of_pots_names_the_units_that_take_it(tmp_path):
+    text = SHIPPED.replace('kind = "filtered_differentiator"', 'kind = "reduced_observer"')
+    said = refusal(spec_file(tmp_path, "observer", text))
+    assert "13 pots" in said
+    assert said.rstrip().endswith("; patch.units = 2 places it on 2 slaved units (set it in [patch])")
+    patches(spec_file(tmp_path, "two", with_lines(text, "patch", "units = 2")))
+    auto = with_lines(text, "patch", 'units = "auto"', "max_units = 1")
+    assert "patch.max_units = 2 lets it take 2 slaved units" in refusal(spec_file(tmp_path, "auto", auto))
+
+
+def test_a_compensator_that_does_not_fit_names_the_realisation_that_does(tmp_path):
+    text = with_lines(SHIPPED.replace('kind = "filtered_differentiator"', 'kind = "reduced_observer"'), "patch",
+                      'realization = "compensator"', "units = 2")
+    said = refusal(spec_file(tmp_path, "compensator", text))
+    assert 'patch.realization = "states" fits it on 2 units (set it in [patch])' in said
+    patches(spec_file(tmp_path, "states", text.replace('realization = "compensator"', 'realization = "states"')))
+
+
+def test_no_change_is_named_when_none_is_found(tmp_path):
+    text = SHIPPED.replace('kind = "filtered_differentiator"', 'kind = "kalman"')  # 36 pots: no GP-6 pair takes it
+    said = refusal(spec_file(tmp_path, "kalman", text))
+    assert "36 pots" in said and "(set it in" not in said
+
+
 def test_a_cure_travels_with_its_error():
     e = ResourceError("spec.toml", "machine", "too big", Cure("patch.units", 2, "places it on 2 slaved units"))
     back = pickle.loads(pickle.dumps(e))

@@ -224,7 +224,7 @@ def _estimator(spec: DesignSpec, bench: BenchProfile | None, model: LinearModel,
     ``redesign`` designs a changed spec as this one is (a refusal's suggestion is checked so)."""
     e = spec.estimator
     if e.kind == "kalman":
-        return kalman_estimator(spec, model, K, lqr_m)
+        return kalman_estimator(spec, model, K, lqr_m, redesign)
     if e.kind == "differentiator":
         roll = e.rolloff_s or default_rolloff_s
         if roll is None:

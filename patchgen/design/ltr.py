@@ -1,8 +1,11 @@
 """The Kalman estimator and loop transfer recovery: the steady-state filter at a given rho, its
 compensator, and the search over rho = 1, 10, 100, ... for the first loop close enough to the
-LQR loop (docs/spec.md, estimator.rho)."""
+LQR loop (docs/spec.md, estimator.rho). A rho the search cannot compute is refused with the
+rho_max that stops it at the last one it could, once the design made with it passes."""
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 import scipy.linalg as sla
@@ -11,7 +14,7 @@ from patchgen.design.controller import Controller, Estimator, RhoTry, integrator
 from patchgen.design.margins import Margins, loop_margins
 from patchgen.design.model import LinearModel
 from patchgen.design.riccati import STABLE_TOL, filter_gain, filter_inputs, stabilisable
-from patchgen.inputs.errors import InputError
+from patchgen.inputs.errors import Cure, InputError
 from patchgen.inputs.spec import DesignSpec
 
 # rho = "auto" stops at the first rho whose loop margins are this close to the LQR loop's
@@ -81,10 +84,13 @@ def _kalman_margins(spec: DesignSpec, model: LinearModel, K: np.ndarray, rho: fl
     return L, loop_margins(*loop_with_controller(model, kalman_controller(model, K, L)))
 
 
-def kalman_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray, lqr_m: Margins):
+def kalman_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray, lqr_m: Margins,
+                     redesign: Callable[[DesignSpec], object]):
     """The Kalman estimator after loop transfer recovery: rho from the spec, or the first power
     of RHO_STEP whose loop is close enough to the LQR loop (up to the spec's rho_max). The
     filter at rho = 1 gives the report's loop before recovery (left out when there is none).
+    A search that meets a rho it cannot compute is refused with the rho_max that stops it at the
+    last it could, checked by ``redesign`` (the changed spec designed as this one is).
 
     Returns
     -------
@@ -104,8 +110,11 @@ def kalman_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray, lqr_m:
             if ok or rho * RHO_STEP > e.rho_max * (1 + RHO_MAX_SLACK):
                 break
             k += 1
+            try:
+                L, m = _kalman_margins(spec, model, K, RHO_STEP ** k, field)
+            except InputError as exc:
+                raise spec.error(exc.field, exc.message, _stop_at(spec, rho, redesign)) from None
             rho = RHO_STEP ** k
-            L, m = _kalman_margins(spec, model, K, rho, field)
     else:
         field, rho = "estimator.rho", float(e.rho)
         L, m = _kalman_margins(spec, model, K, rho, field)
@@ -123,3 +132,12 @@ def _margins_at_rho1(spec: DesignSpec, model: LinearModel, K: np.ndarray) -> Mar
     except InputError:
         return None
 
+
+def _stop_at(spec: DesignSpec, rho: float, redesign: Callable[[DesignSpec], object]) -> Cure | None:
+    """rho_max = ``rho`` (the last rho the search computed), when the design made with it passes."""
+    try:
+        m = redesign(spec.changed("estimator.rho_max", rho)).lqg_margins
+    except InputError:
+        return None
+    pm = "" if m.pm_deg is None else f", PM {m.pm_deg:.1f} deg"
+    return Cure("estimator.rho_max", rho, f"stops the search at rho = {rho:g}, the last it computes{pm}")

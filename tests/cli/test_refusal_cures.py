@@ -81,6 +81,17 @@ def test_a_suggested_speed_is_offered_only_once_its_design_passes():
     assert corner.way_forward(refused, "estimator.rolloff_s", lambda v: 20.0) is None
 
 
+def test_the_rho_search_names_the_rho_max_that_stops_it_in_time(tmp_path):
+    text = design_path("bench-lqg").read_text().replace("W = [[2.0, 0.0]", "W = [[2e6, 0.0]")
+    text = re.sub(r"(?m)^rho = 1\.0$", 'rho = "auto"', text)
+    assert 'rho = "auto"' in text and "2e6" in text
+    said = refusal(spec_file(tmp_path, "noisy", text))
+    assert "no solution at rho = 10 " in said  # rho = 1 computed, 10 not
+    assert "; estimator.rho_max = 1 stops the search at rho = 1, the last it computes" in said
+    assert said.rstrip().endswith("(set it in [estimator])")
+    patches(spec_file(tmp_path, "stopped", text.replace('rho = "auto"', 'rho = "auto"\nrho_max = 1')))
+
+
 def test_a_patch_short_of_pots_names_the_units_that_take_it(tmp_path):
     text = SHIPPED.replace('kind = "filtered_differentiator"', 'kind = "reduced_observer"')
     said = refusal(spec_file(tmp_path, "observer", text))

@@ -112,6 +112,8 @@ class SimResult:
     history: dict[str, np.ndarray] | None  # of the first run (its seed is ``seed``'s run 0)
     runs: list[RunSummary]
     distribution: Distribution
+    # what each amplifier's output is meant to carry, by id: (polarity, quantity), from the netlist
+    carries: dict[str, tuple[int, str]] = field(default_factory=dict)
 
     def summary(self) -> dict:
         """Everything but the histories, as plain JSON-able data."""

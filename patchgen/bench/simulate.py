@@ -125,4 +125,5 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
         design=netlist.design, scenario=scenario, machine=machine.id, bench=bench.id, ideal=ideal,
         seed=base_seed, settings=settings, amplifiers=circuit.amp_ids, history=history,
         runs=summaries, distribution=distribution(summaries, circuit.amp_ids),
+        carries={a.id: (a.carries.polarity, a.carries.quantity) for a in netlist.amplifiers},
     )

@@ -1,5 +1,6 @@
 """The values the design stages hand each other: a controller as matrices, the estimator behind
-it (a reduced observer's matrices among them), and the integrator part every controller shares.
+it (a reduced observer's matrices among them), the integrator part every controller shares, and
+the loop a controller closes around the design model.
 
 patchgen.design.lqg builds them, patchgen.design.observer and patchgen.design.corner read and
 build them too; keeping them here lets those modules import one another in one direction only.
@@ -95,3 +96,23 @@ def integrator_part(model: LinearModel, K: np.ndarray) -> IntegratorPart:
     for r, i in enumerate(idx):
         Ei[r] = model.A[i, :][[model.index(m) for m in model.measured]]
     return IntegratorPart(tuple(model.states[i] for i in idx), model.A[np.ix_(idx, idx)], Ei, K[:, idx])
+
+
+def loop_with_controller(model: LinearModel, ctl: Controller):
+    """The loop broken at the plant input: plant (without integral states) then controller."""
+    keep = [i for i, s in enumerate(model.states) if not s.startswith("int_")]
+    Ap, Bp, Cp = model.A[np.ix_(keep, keep)], model.B[keep], model.C[:, keep]
+    n, nc = Ap.shape[0], ctl.Ac.shape[0]
+    A = np.zeros((n + nc, n + nc))
+    A[:n, :n] = Ap
+    A[n:, :n] = ctl.Bc @ Cp
+    A[n:, n:] = ctl.Ac
+    B = np.vstack([Bp, np.zeros((nc, 1))])
+    C = -np.hstack([ctl.Dc @ Cp, ctl.Cc])
+    return A, B, C
+
+
+def sort_poles(v) -> np.ndarray:
+    """Eigenvalues in a fixed order: by real part, then imaginary part."""
+    v = np.asarray(v, dtype=complex)
+    return v[np.lexsort((v.imag, v.real))]

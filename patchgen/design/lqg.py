@@ -1,4 +1,5 @@
-"""The LQG design: LQR gain, steady-state Kalman estimator, loop transfer recovery, margins.
+"""The LQG design: LQR gain, the estimator (a differentiator, a reduced observer or the Kalman
+filter with loop transfer recovery, patchgen.design.ltr), margins.
 
 spec -> Design. Control law u = -K x (force in N). The estimator (when there is one) carries the
 plant and actuator states; integral states come from integrators of the measured s and theta.
@@ -12,29 +13,21 @@ import numpy as np
 import scipy.linalg as sla
 
 from patchgen.design import corner
-from patchgen.design.controller import Controller, Estimator, RhoTry, integrator_part
+from patchgen.design.controller import Controller, Estimator, integrator_part, loop_with_controller, sort_poles
+from patchgen.design.ltr import kalman_estimator
 from patchgen.design.margins import Margins, loop_margins
 from patchgen.design.model import LinearModel, build_model, open_loop_poles, plant_params, plant_zeros
 from patchgen.design.numerics import failing_as
 from patchgen.design.observer import ObserverError, reduced_observer, reduced_observer_controller
 from patchgen.design.precision import GainSpread
-from patchgen.design.riccati import design_spread, filter_gain, filter_inputs, lqr_gain
-from patchgen.inputs.errors import InputError
+from patchgen.design.riccati import STABLE_TOL, design_spread, lqr_gain, stabilisable
 from patchgen.inputs.spec import DesignSpec, q_matrix, r_matrix
 from patchgen.plant.cart_pendulum import ESTIMATED_RATE, RATE_OF
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
-# rho = "auto" stops at the first rho whose loop margins are this close to the LQR loop's
-# (docs/spec.md, estimator.rho): "recovered" to within what the margin figures are quoted to.
-LTR_GM_TOLERANCE_DB = 1.0  # each gain limit within 1 dB
-LTR_PM_TOLERANCE_DEG = 5.0  # phase margin within 5 deg
-RHO_STEP = 10.0  # rho = 1, 10, 100, ...: powers of ten (docs/spec.md; the thesis's case 1 lands on 1e7)
-RHO_MAX_SLACK = 1e-9  # relative: rho_max = 1e7 still admits 10^7 computed as a float power
-STABLE_TOL = 1e-12  # a mode with real part above -1e-12 1/s counts as not decaying (rounding)
-RANK_TOL = 1e-9  # the PBH rank test's singular-value cut-off for "the input cannot move this mode"
-ZERO_OFF_AXIS = 1e-8  # rad/s: a lag_zero's zero nearer the origin cancels the cart's pole to RANK_TOL
+ZERO_OFF_AXIS = 1e-8  # rad/s: a lag_zero's zero nearer the origin cancels the cart's pole to riccati.RANK_TOL
 
 
 @dataclass(frozen=True)
@@ -73,21 +66,13 @@ class Design:
         return float(self.K[0, self.model.index(state)])
 
 
-def _stabilisable(A, B) -> bool:
-    n = A.shape[0]
-    for lam in np.linalg.eigvals(A):
-        if lam.real >= -STABLE_TOL and np.linalg.matrix_rank(np.hstack([lam * np.eye(n) - A, B]), tol=RANK_TOL) < n:
-            return False
-    return True
-
-
 def _unstabilisable_part(spec: DesignSpec, model: LinearModel) -> tuple[str, str]:
     """Which part makes the model not stabilisable: an integral state (its leak), else the plant."""
     plant = tuple(s for s in model.states if not s.startswith("int_"))
     Ap, Bp, _ = model.submodel(plant)
     for name in (s for s in model.states if s.startswith("int_")):
         A, B, _ = model.submodel(plant + (name,))
-        if _stabilisable(Ap, Bp) and not _stabilisable(A, B):
+        if stabilisable(Ap, Bp) and not stabilisable(A, B):
             leak = getattr(spec.integrators, f"{name}_leak")
             return (f"integrators.{name}_leak", f"with a leak of {leak:g} 1/s the integral state {name} makes the "
                     "model not stabilisable: a pole on the axis the force cannot move (the default leak avoids it)")
@@ -99,7 +84,7 @@ def lqr(spec: DesignSpec, model: LinearModel) -> tuple[np.ndarray, np.ndarray, n
     """Q, R, K, S of the regulator, with the checks a user needs named."""
     Q, R = q_matrix(spec), r_matrix(spec)
     A, B = model.A, model.B
-    if not _stabilisable(A, B):
+    if not stabilisable(A, B):
         z = spec.actuator.zero
         if spec.actuator.model == "lag_zero" and z < ZERO_OFF_AXIS:
             where = "exactly at the origin" if z == 0 else f"at {z:g} rad/s, this close to the origin,"
@@ -108,7 +93,7 @@ def lqr(spec: DesignSpec, model: LinearModel) -> tuple[np.ndarray, np.ndarray, n
         raise spec.error(*_unstabilisable_part(spec, model))
     ev, vec = np.linalg.eigh((Q + Q.T) / 2)
     H = (vec * np.sqrt(np.clip(ev, 0, None))) @ vec.T
-    if not _stabilisable(A.T, H.T):
+    if not stabilisable(A.T, H.T):
         field = "weights.bryson" if spec.weights.bryson is not None else "weights.Q"
         raise spec.error(field, "(A, Q^1/2) is not detectable: weight the unstable modes (e.g. theta)")
     try:
@@ -119,47 +104,6 @@ def lqr(spec: DesignSpec, model: LinearModel) -> tuple[np.ndarray, np.ndarray, n
     if not np.all(np.isfinite(K)) or np.max(np.linalg.eigvals(A - B @ K).real) >= -STABLE_TOL:
         raise spec.error("weights", "the Riccati solution does not stabilise the model")
     return Q, R, K, S
-
-
-def kalman_gain(spec: DesignSpec, model: LinearModel, rho: float, field: str = "estimator.rho") -> np.ndarray:
-    """Steady-state Kalman gain for the estimated states from s, theta, s_dot, W scaled by rho; a
-    filter that cannot be had at this rho is refused naming ``field``."""
-    Ae, Ce, Qn, V = filter_inputs(spec, model, rho)
-    n = Ae.shape[0]
-    if not _stabilisable(Ae.T, Ce.T):
-        raise spec.error("estimator", "the estimated model is not detectable from s, theta, s_dot")
-    ratio = np.abs(Qn).max() / np.abs(V).max()  # process noise against measurement noise
-    little = ("rho x W puts so much process noise on the model against V that the filter is beyond computing "
-              "(a smaller rho or W)" if ratio > 1 else "rho x W puts too little process noise on the model to move "
-              "the plant's poles off the axis (a larger rho or W)")
-    try:
-        P = sla.solve_continuous_are(Ae.T, Ce.T, Qn, V)
-    except (np.linalg.LinAlgError, ValueError) as exc:
-        raise spec.error(field, f"the estimator Riccati equation has no solution at rho = {rho:g} ({exc}): "
-                         f"{little}") from None
-    L = filter_gain(Ae, Ce, Qn, V, P)
-    if (not np.all(np.isfinite(L)) or np.max(np.linalg.eigvals(Ae - L @ Ce).real) >= -STABLE_TOL
-            or L.shape[0] != n):
-        raise spec.error(field, f"the Kalman filter is not stable at rho = {rho:g}: {little}")
-    return L
-
-
-def kalman_controller(model: LinearModel, K: np.ndarray, L: np.ndarray) -> Controller:
-    """LQG compensator (A - B K - L C for the estimated states) plus the integrators of y."""
-    est = model.estimated
-    Ae, Be, Ce = model.submodel(est)
-    Ke = K[:, [model.index(s) for s in est]]
-    ip = integrator_part(model, K)
-    inames, Ai, Ei, Ki = ip.names, ip.Ai, ip.Ei, ip.Ki
-    ne, ni = len(est), len(inames)
-    Ac = np.zeros((ne + ni, ne + ni))
-    Ac[:ne, :ne] = Ae - Be @ Ke - L @ Ce
-    Ac[:ne, ne:] = -Be @ Ki
-    Ac[ne:, ne:] = Ai
-    Bc = np.vstack([L, Ei])
-    Cc = -np.hstack([Ke, Ki])
-    Dc = np.zeros((1, len(model.measured)))
-    return Controller(tuple(f"xhat_{s}" for s in est) + inames, Ac, Bc, Cc, Dc)
 
 
 def differentiator_controller(model: LinearModel, K: np.ndarray, rolloff: float) -> Controller:
@@ -206,30 +150,6 @@ def differentiator_controller(model: LinearModel, K: np.ndarray, rolloff: float)
     return Controller(tuple(names), Ac, Bc, Cc, Dc)
 
 
-def loop_with_controller(model: LinearModel, ctl: Controller):
-    """The loop broken at the plant input: plant (without integral states) then controller."""
-    keep = [i for i, s in enumerate(model.states) if not s.startswith("int_")]
-    Ap, Bp, Cp = model.A[np.ix_(keep, keep)], model.B[keep], model.C[:, keep]
-    n, nc = Ap.shape[0], ctl.Ac.shape[0]
-    A = np.zeros((n + nc, n + nc))
-    A[:n, :n] = Ap
-    A[n:, :n] = ctl.Bc @ Cp
-    A[n:, n:] = ctl.Ac
-    B = np.vstack([Bp, np.zeros((nc, 1))])
-    C = -np.hstack([ctl.Dc @ Cp, ctl.Cc])
-    return A, B, C
-
-
-def _close_enough(lqg: Margins, lqr: Margins) -> bool:
-    """Loop transfer recovery has recovered the LQR loop: gain limits and phase margin within the
-    LTR tolerances (the same gain limits present)."""
-    if not lqg.stable or lqg.pm_deg is None or lqr.pm_deg is None:
-        return False
-    gm_ok = (lqg.lower_gm_db is None) == (lqr.lower_gm_db is None) and (
-        lqr.lower_gm_db is None or abs(lqg.lower_gm_db - lqr.lower_gm_db) <= LTR_GM_TOLERANCE_DB)
-    return gm_ok and abs(lqg.pm_deg - lqr.pm_deg) <= LTR_PM_TOLERANCE_DEG
-
-
 def design(spec: DesignSpec, bench: BenchProfile | None = None, *, plant: PlantParams | None = None,
            default_rolloff_s: float | None = None) -> Design:
     """Run the whole design of a spec: LQR gain, estimator, compensator and loop margins.
@@ -265,9 +185,10 @@ def design(spec: DesignSpec, bench: BenchProfile | None = None, *, plant: PlantP
         cl = np.linalg.eigvals(model.A - model.B @ K)
         lqr_m = loop_margins(model.A, model.B, K)
         zeros = {"s/F_U": plant_zeros(spec, "s"), "s_dot/F_U": plant_zeros(spec, "s_dot")}
+    redesign = lambda sp: design(sp, bench, plant=plant, default_rolloff_s=default_rolloff_s)
     with failing_as(spec.path, "estimator", f"the {spec.estimator.kind} estimator"):
-        est, ctl, lqg_m = _estimator(spec, bench, model, K, lqr_m, default_rolloff_s)
-    return Design(spec=spec, model=model, Q=Q, R=R, K=K, S=S, closed_loop_poles=_sort(cl),
+        est, ctl, lqg_m = _estimator(spec, bench, model, K, lqr_m, default_rolloff_s, redesign)
+    return Design(spec=spec, model=model, Q=Q, R=R, K=K, S=S, closed_loop_poles=sort_poles(cl),
                   open_loop_poles=open_loop_poles(model), zeros=zeros, lqr_margins=lqr_m, estimator=est,
                   controller=ctl, lqg_margins=lqg_m, spread=design_spread(spec, model, Q, R, est))
 
@@ -298,11 +219,12 @@ def design_on(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile | N
 
 
 def _estimator(spec: DesignSpec, bench: BenchProfile | None, model: LinearModel, K: np.ndarray, lqr_m: Margins,
-               default_rolloff_s: float | None) -> tuple[Estimator | None, Controller | None, Margins | None]:
-    """The spec's estimator, its controller and the loop margins with it (none: all None)."""
+               default_rolloff_s: float | None, redesign) -> tuple[Estimator | None, Controller | None, Margins | None]:
+    """The spec's estimator, its controller and the loop margins with it (none: all None);
+    ``redesign`` designs a changed spec as this one is (a refusal's suggestion is checked so)."""
     e = spec.estimator
     if e.kind == "kalman":
-        return _kalman_estimator(spec, model, K, lqr_m)
+        return kalman_estimator(spec, model, K, lqr_m, redesign)
     if e.kind == "differentiator":
         roll = e.rolloff_s or default_rolloff_s
         if roll is None:
@@ -319,75 +241,37 @@ def _estimator(spec: DesignSpec, bench: BenchProfile | None, model: LinearModel,
         if bench is None:
             raise ValueError(f"{spec.name}: a {e.kind} estimator is shaped for the bench's noise; pass the bench "
                              f"profile the spec names ({spec.bench!r}, patchgen.profiles.bench.load_bench)")
-        est, ctl = _noise_shaped_estimator(spec, bench, model, K)
+        est, ctl = _noise_shaped_estimator(spec, bench, model, K, redesign)
         return est, ctl, loop_margins(*loop_with_controller(model, ctl))
     return None, None, None
 
 
-def _kalman_margins(spec: DesignSpec, model: LinearModel, K: np.ndarray, rho: float, field: str = "estimator.rho"):
-    """The Kalman gain at ``rho`` and the loop margins of its compensator."""
-    L = kalman_gain(spec, model, rho, field)
-    return L, loop_margins(*loop_with_controller(model, kalman_controller(model, K, L)))
-
-
-def _kalman_estimator(spec: DesignSpec, model: LinearModel, K: np.ndarray, lqr_m: Margins):
-    """The Kalman estimator after loop transfer recovery: rho from the spec, or the first power
-    of RHO_STEP whose loop is close enough to the LQR loop (up to the spec's rho_max). The
-    filter at rho = 1 gives the report's loop before recovery (left out when there is none)."""
-    e = spec.estimator
-    tries: list[RhoTry] = []
-    if e.rho == "auto":
-        field = "estimator.W"  # the search starts at rho = 1: W (through Gamma) is the noise it starts from
-        rho, k = 1.0, 0
-        L, m = _kalman_margins(spec, model, K, rho, field)
-        m1 = m
-        while True:
-            ok = _close_enough(m, lqr_m)
-            tries.append(RhoTry(rho=rho, margins=m, accepted=ok))
-            if ok or rho * RHO_STEP > e.rho_max * (1 + RHO_MAX_SLACK):
-                break
-            k += 1
-            rho = RHO_STEP ** k
-            L, m = _kalman_margins(spec, model, K, rho, field)
-    else:
-        field, rho = "estimator.rho", float(e.rho)
-        L, m = _kalman_margins(spec, model, K, rho, field)
-        tries.append(RhoTry(rho=rho, margins=m, accepted=_close_enough(m, lqr_m)))
-        m1 = m if rho == 1.0 else _margins_at_rho1(spec, model, K)
-    Ae, _, Ce = model.submodel(model.estimated)
-    est = Estimator(kind="kalman", states=model.estimated, L=L, poles=_sort(np.linalg.eigvals(Ae - L @ Ce)),
-                    rho=rho, rho_tries=tries, margins_rho1=m1)
-    return est, kalman_controller(model, K, L), m
-
-
-def _margins_at_rho1(spec: DesignSpec, model: LinearModel, K: np.ndarray) -> Margins | None:
-    try:  # no filter at rho = 1: the report leaves the loop before recovery out
-        return _kalman_margins(spec, model, K, 1.0)[1]
-    except InputError:
-        return None
-
-
-def _noise_shaped_estimator(spec: DesignSpec, bench: BenchProfile, model: LinearModel, K: np.ndarray):
+def _noise_shaped_estimator(spec: DesignSpec, bench: BenchProfile, model: LinearModel, K: np.ndarray, redesign):
     """A filtered differentiator or a reduced observer, its speed from the spec or, when the spec
-    leaves it out, from the bench's noise levels (patchgen.design.corner)."""
+    leaves it out, from the bench's noise levels (patchgen.design.corner); a refusal names the
+    speed to set when a design with it passes (corner.way_forward, through ``redesign``)."""
     e = spec.estimator
     fixed = e.rolloff_s if e.kind == "filtered_differentiator" else e.observer_pole
     if e.kind == "filtered_differentiator":
         build = lambda r: differentiator_controller(model, K, r)
-        grid = corner.ROLLOFF_GRID_S
+        grid, field = corner.ROLLOFF_GRID_S, "estimator.rolloff_s"
     else:
         build = lambda p: reduced_observer_controller(model, K, reduced_observer(model, p))
-        grid = corner.POLE_GRID
+        grid, field = corner.POLE_GRID, "estimator.observer_pole"
     noise = corner.noise_model(spec, bench, model)
     if fixed is None:
-        try:
-            def robust(c):
-                mg = loop_margins(*loop_with_controller(model, c), gain_limits=False)
-                return mg.stable and mg.pm_deg is not None and mg.pm_deg >= corner.MIN_PM_DEG
+        def margin(c):
+            mg = loop_margins(*loop_with_controller(model, c), gain_limits=False)
+            return mg.pm_deg if mg.stable else None
 
-            value = corner.choose(model, K, build, noise, grid, robust).value
-        except ValueError as exc:
-            raise spec.error("estimator", str(exc)) from None
+        def margin_with(v):
+            mg = redesign(spec.changed(field, v)).lqg_margins
+            return mg.pm_deg if mg.stable else None
+
+        try:
+            value = corner.choose(model, K, build, noise, grid, margin).value
+        except corner.NoRobustSpeed as exc:
+            raise spec.error("estimator", str(exc), corner.way_forward(exc, field, margin_with)) from None
     else:
         value = float(fixed)
     try:
@@ -401,12 +285,6 @@ def _noise_shaped_estimator(spec: DesignSpec, bench: BenchProfile, model: Linear
                         rolloff_s=value, **chosen)
     else:
         obs = reduced_observer(model, value)
-        est = Estimator(kind=e.kind, states=obs.unmeasured, L=obs.Lr, poles=_sort(np.linalg.eigvals(obs.F)),
+        est = Estimator(kind=e.kind, states=obs.unmeasured, L=obs.Lr, poles=sort_poles(np.linalg.eigvals(obs.F)),
                         observer=obs, **chosen)
     return est, ctl
-
-
-def _sort(v):
-    """Eigenvalues in a fixed order: by real part, then imaginary part."""
-    v = np.asarray(v, dtype=complex)
-    return v[np.lexsort((v.imag, v.real))]

@@ -1,5 +1,6 @@
 """The design's two Riccati gains from their inputs: the regulator's K and the Kalman filter's L,
-and how far each moves when those inputs move at rounding level (patchgen.design.precision)."""
+whether they can be had (the PBH test), and how far each moves when those inputs move at rounding
+level (patchgen.design.precision)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,18 @@ from patchgen.design.controller import Estimator
 from patchgen.design.model import LinearModel
 from patchgen.design.precision import GainSpread, gain_spread
 from patchgen.inputs.spec import DesignSpec
+
+STABLE_TOL = 1e-12  # a mode with real part above -1e-12 1/s counts as not decaying (rounding)
+RANK_TOL = 1e-9  # the PBH rank test's singular-value cut-off for "the input cannot move this mode"
+
+
+def stabilisable(A, B) -> bool:
+    """The PBH test: every mode of A that does not decay can be moved by B (detectability: A', C')."""
+    n = A.shape[0]
+    for lam in np.linalg.eigvals(A):
+        if lam.real >= -STABLE_TOL and np.linalg.matrix_rank(np.hstack([lam * np.eye(n) - A, B]), tol=RANK_TOL) < n:
+            return False
+    return True
 
 
 def lqr_gain(A, B, Q, R, S=None) -> np.ndarray:

@@ -14,7 +14,7 @@ import numpy as np
 from pydantic import Field, PrivateAttr, create_model, field_validator
 
 from patchgen.inputs.drive_fields import LAG_MODELS, DriveFields, k_u_field, k_u_of
-from patchgen.inputs.errors import InputError
+from patchgen.inputs.errors import Cure, InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded, zero_or_at_least
 from patchgen.inputs.resources import resolve
 from patchgen.inputs.validation import read_toml, validate
@@ -191,9 +191,16 @@ class DesignSpec(InputModel):
             out.append("actuator")
         return out
 
-    def error(self, field: str, message: str) -> InputError:
-        """An InputError naming this spec's file and ``field`` (to raise; a design stage's refusal)."""
-        return InputError(self._path, field, message)
+    def error(self, field: str, message: str, cure: Cure | None = None) -> InputError:
+        """An InputError naming this spec's file and ``field`` (to raise; a design stage's refusal),
+        with the change that lifts it when the stage found one."""
+        return InputError(self._path, field, message, cure)
+
+    def changed(self, field: str, value) -> DesignSpec:
+        """This spec with one field of one table set (``estimator.rolloff_s``), the same file named:
+        a change a refusing stage tries before it suggests it."""
+        table, key = field.split(".")
+        return self.model_copy(update={table: getattr(self, table).model_copy(update={key: value})})
 
     def theta_dot_scale(self) -> float:
         """V per rad/s of the voltage carrying theta_dot: the spec's, else the theta sensor's."""

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from patchgen.design.lqg import Design
-from patchgen.inputs.errors import ResourceError
+from patchgen.inputs.errors import Cure, InputError, ResourceError
 from patchgen.patch import compensator_fit
 from patchgen.patch.allocation import allocate
 from patchgen.patch.netlist import Netlist
@@ -12,13 +14,55 @@ from patchgen.patch.realization import realize
 from patchgen.profiles.machine import MachineProfile, the_machine
 
 
-def build_patch(design: Design, machine: MachineProfile, units: int | str | None = None) -> Netlist:
+def build_patch(design: Design, machine: MachineProfile, units: int | str | None = None,
+                suggest: bool = True) -> Netlist:
     """Scale the design into machine volts and place it on ``units`` slaved machines (default: the
     spec's [patch] units; "auto" takes the fewest that fit, up to the spec's max_units, else the
     profile's). With ``[patch] realization = "compensator"`` the law is placed as one system
     (patchgen.patch.compensator_fit): the spec's order and form, or the cheapest form of the full
     order that fits (at the full order, with its fast modes residualised or kept), first among
-    those that keep compensator_fit.KEEP_PM_SHARE of the design's phase margin as dialled."""
+    those that keep compensator_fit.KEEP_PM_SHARE of the design's phase margin as dialled.
+
+    A patch that does not fit the spec's own [patch] settings (``units`` not given) is refused
+    with the [patch] change that makes it fit, when one does and ``suggest`` asks for it (a study
+    that judges the error, not a user, need not pay for the search): :func:`fitting_change`."""
+    try:
+        return _build(design, machine, units)
+    except ResourceError as exc:
+        cure = fitting_change(design, machine) if units is None and suggest else None
+        if cure is None:
+            raise
+        raise ResourceError(exc.source, exc.field, exc.message, cure) from None
+
+
+def fitting_change(design: Design, machine: MachineProfile) -> Cure | None:
+    """The one [patch] field whose change makes the spec's patch fit the machine, checked by
+    building the patch with it: more slaved units (up to the machine profile's max_units), then
+    the other realisation (the law as its states, or as one compensator)."""
+    spec, p = design.spec, design.spec.patch
+    most = machine.max_units
+    tries: list[tuple[str, int | str, str]] = []
+    if p.units == "auto":
+        tries += [("patch.max_units", n, f"lets it take {n} slaved units") for n in range((p.max_units or most) + 1,
+                                                                                          most + 1)]
+    else:
+        tries += [("patch.units", n, f"places it on {n} slaved units") for n in range(p.units + 1, most + 1)]
+    if design.controller is not None:
+        other = "compensator" if p.realization == "states" else "states"
+        tries.append(("patch.realization", other, "fits it"))
+    for field, value, gives in tries:
+        try:
+            net = _build(replace(design, spec=spec.changed(field, value)), machine, None)
+        except InputError:  # it does not fit, or that realisation refuses the law for its own reason
+            continue
+        if field == "patch.realization":
+            gives = f"fits it on {net.units} unit{'s' if net.units > 1 else ''}"
+        return Cure(field, value, gives)
+    return None
+
+
+def _build(design: Design, machine: MachineProfile, units: int | str | None) -> Netlist:
+    """build_patch without a suggestion."""
     spec = design.spec
     units = spec.patch.units if units is None else units
     cap = spec.patch.max_units or machine.max_units

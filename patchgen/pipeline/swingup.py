@@ -49,6 +49,12 @@ class SwingupReport:
     judged: AsPatched
     prediction: BenchPrediction
 
+    @property
+    def schedule_note(self) -> str | None:
+        """For the 'schedule' strategy, the note that its optimiser kept its seed (the supervisory
+        switching table) unchanged; None when it moved the switches, or for another strategy."""
+        return self.manoeuvre.pump.notes.get("kept_seed_note")
+
     def summary(self) -> dict:
         """Every figure and verdict, as plain JSON-able data (manoeuvre.json, --json)."""
         m, p = self.manoeuvre, self.manoeuvre.pump
@@ -60,6 +66,13 @@ class SwingupReport:
                                                     if k != "final_state"}}
         out["switching_table"] = [{k: v.item() if hasattr(v, "item") else v for k, v in row.items()}
                                   for row in p.table_rows()]  # the switching table the command prints
+        if self.plan.strategy == "schedule":
+            n = p.notes
+            out["schedule"] = {"optimised": bool(n["optimised"]), "kept_seed": bool(n["kept_seed"]),
+                               "iterations": int(n["iterations"]), "predicted_T_F_s": float(n["predicted_T_F"]),
+                               "seed_T_F_s": float(n["seed_T_F"])}
+            if self.schedule_note is not None:
+                out["schedule"]["note"] = self.schedule_note
         if m.sensitivity is not None:
             out["schedule_sensitivity"] = [_plain(r) for r in m.sensitivity]
         if self.comparison is not None:

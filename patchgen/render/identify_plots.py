@@ -24,14 +24,21 @@ def plot_name(source: str, taken: set[str]) -> str:
 
 
 def fit_plot(fit: TestFit, stem: str) -> dict[str, bytes]:
-    """The fit's panels as ``<stem>.png`` (name -> bytes); nothing for a fit without panels."""
+    """The fit's panels (:func:`fit_figure`) as ``<stem>.png`` (name -> bytes); nothing for a fit
+    without panels."""
     if not fit.panels:
         return {}
+    return plotting.rendered(fit_figure(fit), stem)
+
+
+def fit_figure(fit: TestFit):
+    """One panel per fit panel, measured and fitted named in a legend above the panel's right end
+    (outside the data: it covers no trace), the recording's name and test above the first, left."""
     n = len(fit.panels)
-    fig = plotting.figure(WIDTH_IN, PANEL_IN * n + 0.6)
+    height = PANEL_IN * n + 0.6
+    fig = plotting.figure(WIDTH_IN, height)
     axes = fig.subplots(n, 1, squeeze=False)[:, 0]
-    fig.subplots_adjust(left=0.1, right=0.98, top=1 - 0.4 / (PANEL_IN * n + 0.6), bottom=0.5 / (PANEL_IN * n + 0.6),
-                        hspace=0.55)
+    fig.subplots_adjust(left=0.1, right=0.98, top=1 - 0.45 / height, bottom=0.5 / height, hspace=0.6)
     cols = plotting.columns(fig)
     for ax, p in zip(axes, fit.panels):
         if p.points:
@@ -40,10 +47,10 @@ def fit_plot(fit: TestFit, stem: str) -> dict[str, bytes]:
             ax.plot(*plotting.envelope(p.x, p.measured, cols), color=MEASURED, linewidth=0.7, label="measured")
         if p.fitted is not None:
             ax.plot(p.x if p.fitted_x is None else p.fitted_x, p.fitted, color=FITTED, linewidth=0.9, label="fitted")
-            ax.legend(loc="best", fontsize=7, frameon=False)
+            plotting.legend_above(ax)
         ax.set_ylabel(p.ylabel, fontsize=8)
         ax.set_xlabel(p.xlabel, fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(True, linewidth=0.3, alpha=0.5)
-    axes[0].set_title(f"{Path(fit.source).name}: {fit.title or fit.test}", fontsize=9)
-    return plotting.rendered(fig, stem)
+    axes[0].set_title(f"{Path(fit.source).name}: {fit.title or fit.test}", fontsize=9, loc="left")
+    return fig

@@ -13,6 +13,9 @@ import numpy as np
 
 PNG_DPI = 100
 SVG_RC = {"svg.fonttype": "path"}  # glyphs as paths: the same bytes on every machine
+LEGEND_PT = 7  # a legend's text, points
+# theta, in every plot: degrees wrapped to -180..180, 0 upright (+/-180 hanging), as the axis says
+THETA_LABEL = "theta (deg)\n±180, 0 upright"
 
 
 def columns(fig, dpi: float = PNG_DPI) -> int:
@@ -54,6 +57,32 @@ def stacked(width_in: float, height_in: float, n: int, top_in: float = 0.4, bott
     fig.subplots_adjust(left=left_in / width_in, right=1 - right_in / width_in, top=1 - top_in / height_in,
                         bottom=bottom_in / height_in, hspace=hspace)
     return fig, axes
+
+
+def legend_above(ax, fontsize: float = LEGEND_PT):
+    """The axes' labelled lines named in one row just above its top right corner: outside the
+    data, so the legend covers no curve (``loc="best"`` still may, on a busy panel). Nothing when
+    no line is labelled. Returns the legend (or None)."""
+    handles, labels = ax.get_legend_handles_labels()
+    if not handles:
+        return None
+    return ax.legend(handles, labels, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncols=len(handles),
+                     fontsize=fontsize, frameon=False, borderaxespad=0.15, handlelength=1.8, columnspacing=1.2)
+
+
+def theta_degrees(t: np.ndarray, theta_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """theta as :data:`THETA_LABEL` says, in degrees wrapped to -180..180 (0 upright), with a gap
+    (NaN) where it wraps, so no line is drawn across the plot from +180 to -180."""
+    t = np.asarray(t, dtype=float)
+    deg = (np.degrees(np.asarray(theta_rad, dtype=float)) + 180.0) % 360.0 - 180.0
+    jumps = np.flatnonzero(np.abs(np.diff(deg)) > 180.0) + 1
+    return np.insert(t, jumps, (t[jumps - 1] + t[jumps]) / 2), np.insert(deg, jumps, np.nan)
+
+
+def full_circle(ax) -> None:
+    """A theta axis over the whole circle: -180 to 180 degrees, ticks every 90."""
+    ax.set_ylim(-195.0, 195.0)
+    ax.set_yticks([-180, -90, 0, 90, 180])
 
 
 def rendered(fig, stem: str, svg: bool = False, dpi: float = PNG_DPI, salt: str = "patchgen") -> dict[str, bytes]:

@@ -1,7 +1,7 @@
 """A simulation's files, rendered to bytes for the all-or-nothing writer
 (patchgen.render.outputs.write_files): history.csv (first run), runs.csv (one line per run),
-summary.json (sorted keys) and the history.png plot (and history.svg). The same result gives the
-same bytes. The plot is drawn in the plot helper process when one was started
+summary.json (sorted keys) and the history.png plot (and history.svg), every line in it named.
+The same result gives the same bytes. The plot is drawn in the plot helper process when one was started
 (patchgen.render.plot_helper), while this one writes the tables."""
 
 from __future__ import annotations
@@ -93,11 +93,30 @@ def _num(v: float | None) -> str:
 
 
 def _plot(result: SimResult, svg: bool = False) -> dict[str, bytes]:
-    """The first run's histories, a panel each; u_c shares the panel of the amplifier that
-    makes it (the same trace), with the rails. Returns history.png (and history.svg) by name.
-    matplotlib's settings are changed only inside a context, for this figure."""
+    """history.png (and history.svg) by name: :func:`history_figure` rendered."""
     import matplotlib
 
+    from patchgen.render import plotting
+
+    with matplotlib.rc_context({"font.size": FONT_SIZE}):
+        return plotting.rendered(history_figure(result), "history", svg)
+
+
+def _amp_label(result: SimResult, amp: str) -> str:
+    """An amplifier's panel label: its id and the signal it carries (``A5: −dθ/dt (V)``)."""
+    from patchgen.render.diagram_symbols import signed_label  # the diagram's names (loads schemdraw)
+
+    if amp not in result.carries:
+        return f"{amp} (V)"
+    polarity, quantity = result.carries[amp]
+    return f"{amp}: {signed_label(polarity, quantity)} (V)"
+
+
+def history_figure(result: SimResult):
+    """The first run's histories, a panel each, every line named: u_c shares the panel of the
+    amplifier that makes it (the same trace); each amplifier's panel says the signal it carries;
+    the rails, the limit switch's trip and the fall are named in each panel's legend, above it
+    (outside the data). Draw inside a ``matplotlib.rc_context`` for the font size."""
     from patchgen.render import plotting
 
     h = result.history
@@ -106,34 +125,34 @@ def _plot(result: SimResult, svg: bool = False) -> dict[str, bytes]:
     sat = result.settings.saturation_V
     out_amp = [a for a in result.amplifiers if np.array_equal(h[a], h["u_c"])][:1]
     panels = [("s (m)", [("s", h["s"]), ("s_ref", h["s_ref"])], None),
-              ("theta (deg)", [("theta", np.degrees(h["theta"]))], None),
+              (plotting.THETA_LABEL, [("theta", h["theta"])], None),
               (f"u_c = {out_amp[0]} (V)" if out_amp else "u_c (V)", [("u_c", h["u_c"])], sat if out_amp else None),
               ("force (N)", [("force", h["force"])], None)]
-    panels += [(f"{a} (V)", [(a, h[a])], sat) for a in result.amplifiers if a not in out_amp]
-    with matplotlib.rc_context({"font.size": FONT_SIZE}):
-        fig, axes = plotting.stacked(8.0, 1.5 * len(panels) + 0.6, len(panels))
-        cols = plotting.columns(fig)
-        for ax, (label, lines, rail) in zip(axes, panels):
-            for name, y in lines:
-                ax.plot(*plotting.envelope(t, y, cols), lw=0.8, label=name)
-            if rail is not None:
-                ax.axhline(rail, color="tab:red", lw=0.6, ls="--")
-                ax.axhline(-rail, color="tab:red", lw=0.6, ls="--")
-            if first.trip_time_s is not None:
-                ax.axvline(first.trip_time_s, color="black", lw=0.6, ls=":")
-            if first.fall_time_s is not None:
-                ax.axvline(first.fall_time_s, color="tab:purple", lw=0.6, ls=":")
-            ax.set_ylabel(label)
-            ax.grid(True, lw=0.3)
-            if len(lines) > 1:
-                ax.legend(loc="upper right", fontsize=7, ncols=len(lines))
-        axes[-1].set_xlabel("t (s)")
-        mode = "ideal" if result.ideal else f"bench {result.bench}"
-        events = []
+    panels += [(_amp_label(result, a), [(a, h[a])], sat) for a in result.amplifiers if a not in out_amp]
+    fig, axes = plotting.stacked(8.0, 1.5 * len(panels) + 0.8, len(panels), top_in=0.65)
+    cols = plotting.columns(fig)
+    for ax, (label, lines, rail) in zip(axes, panels):
+        for name, y in lines:
+            tt, yy = plotting.theta_degrees(t, y) if name == "theta" else (t, y)
+            ax.plot(*plotting.envelope(tt, yy, cols), lw=0.8, label=name if len(lines) > 1 else "_" + name)
+        if rail is not None:
+            ax.axhline(rail, color="tab:red", lw=0.6, ls="--", label=f"rails ±{rail:g} V")
+            ax.axhline(-rail, color="tab:red", lw=0.6, ls="--")
         if first.trip_time_s is not None:
-            events.append(f"limit switch at {first.trip_time_s:.2f} s")
+            ax.axvline(first.trip_time_s, color="black", lw=0.6, ls=":",
+                       label=f"limit switch {first.trip_time_s:.2f} s")
         if first.fall_time_s is not None:
-            events.append(f"fallen at {first.fall_time_s:.2f} s")
-        fig.suptitle(f"{result.design} / {result.scenario.name} / {mode} / seed {result.seed}: "
-                     + (", ".join(events) if events else "held"))
-        return plotting.rendered(fig, "history", svg)
+            ax.axvline(first.fall_time_s, color="tab:purple", lw=0.6, ls=":", label=f"fallen {first.fall_time_s:.2f} s")
+        ax.set_ylabel(label)
+        ax.grid(True, lw=0.3)
+        plotting.legend_above(ax)
+    axes[-1].set_xlabel("t (s)")
+    mode = "ideal" if result.ideal else f"bench {result.bench}"
+    events = []
+    if first.trip_time_s is not None:
+        events.append(f"limit switch at {first.trip_time_s:.2f} s")
+    if first.fall_time_s is not None:
+        events.append(f"fallen at {first.fall_time_s:.2f} s")
+    fig.suptitle(f"{result.design} / {result.scenario.name} / {mode} / seed {result.seed}: "
+                 + (", ".join(events) if events else "held"), y=1 - 0.12 / fig.get_figheight())
+    return fig

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from patchgen.plant.cart_pendulum import STATE_UNITS
+from patchgen.plant.cart_pendulum import ANGLE, STATE_UNITS
 from patchgen.spice.compare import PLOT_POINTS, Comparison
 
 PLOT_DPI = 120  # the overlay is a small figure: screen resolution is enough
@@ -31,14 +31,17 @@ def comparison_plot(cmp: Comparison, stem: str, title: str = "", own_label: str 
     for ax, name in zip(axes, names):
         unit, scale = _UNITS.get(name, ("", 1.0))
         a = cmp.signals[name]
-        ax.plot(*plotting.envelope(cmp.t, cmp.own[name] * scale, cols), color="tab:blue", lw=1.6, label=own_label)
-        ax.plot(*plotting.envelope(cmp.t, cmp.spice[name] * scale, cols), color="tab:orange", lw=1.2, ls="--",
-                label="ngspice")
-        ax.set_ylabel(f"{name} ({unit})" if unit else name)
+        for run, label, style in ((cmp.own, own_label, dict(color="tab:blue", lw=1.6)),
+                                  (cmp.spice, "ngspice", dict(color="tab:orange", lw=1.2, ls="--"))):
+            if name == ANGLE:
+                ax.plot(*plotting.envelope(*plotting.theta_degrees(cmp.t, run[name]), cols), label=label, **style)
+            else:
+                ax.plot(*plotting.envelope(cmp.t, run[name] * scale, cols), label=label, **style)
+        ax.set_ylabel(plotting.THETA_LABEL if name == ANGLE else f"{name} ({unit})" if unit else name)
         ax.set_title(f"{name}: RMS diff {100 * a.rms_rel:.3f} %, max diff {100 * a.max_rel:.3f} % "
-                     f"of peak", fontsize=9)
+                     f"of peak", fontsize=9, loc="left")
         ax.grid(True, alpha=0.3)
-        ax.legend(loc="upper right", fontsize=8)
+        plotting.legend_above(ax, fontsize=8)
     axes[-1].set_xlabel("time (s)")
     if title:
         fig.suptitle(title, fontsize=10)

@@ -10,7 +10,6 @@ import io
 
 import numpy as np
 
-from patchgen.swingup.handoff import wrap_angle
 from patchgen.swingup.pumping import SwingUpResult
 from patchgen.swingup.strategies import pendulum_energy, upright_energy
 
@@ -99,7 +98,7 @@ def output_files(result: SwingUpResult, stem: str = "swingup", svg: bool = False
 
 
 def plot(result: SwingUpResult, stem: str, svg: bool = False) -> dict[str, bytes]:
-    """States, force and energy against time, with the hand-off marked.
+    """:func:`pump_figure` as ``<stem>.png`` (and ``<stem>.svg``).
 
     Parameters
     ----------
@@ -117,31 +116,41 @@ def plot(result: SwingUpResult, stem: str, svg: bool = False) -> dict[str, bytes
     """
     from patchgen.render import plotting
 
+    return plotting.rendered(pump_figure(result), stem, svg, salt="patchgen-swingup")
+
+
+def pump_figure(result: SwingUpResult):
+    """States, force and energy against time, every line named in a legend above its panel: the
+    limit switches, the hand-off, the upright pendulum's energy. theta as plotting.THETA_LABEL."""
+    from patchgen.render import plotting
+
     t, x = result.t, result.x
-    fig, ax = plotting.stacked(8, 10, 5)
+    fig, ax = plotting.stacked(8, 10, 5, top_in=0.6, left_in=1.0, hspace=0.3)
     cols = plotting.columns(fig)
     env = lambda y: plotting.envelope(t, y, cols)
     half = result.plant.d / 2.0
-    ax[0].plot(*env(x[:, 0]), color="C0")
-    for y in (-half, half):
-        ax[0].axhline(y, color="k", lw=0.8, ls="--")
+    ax[0].plot(*env(x[:, 0]), color="C0", label="_s")
+    for k, y in enumerate((-half, half)):
+        ax[0].axhline(y, color="k", lw=0.8, ls="--", label="_" if k else f"limit switches ±{half:.3g} m")
     ax[0].set_ylabel("s (m)")
-    ax[1].plot(*env(np.degrees(wrap_angle(x[:, 1]))), color="C1")
-    ax[1].set_ylabel("theta (deg, 0 up)")
+    ax[1].plot(*plotting.envelope(*plotting.theta_degrees(t, x[:, 1]), cols), color="C1", label="_theta")
+    ax[1].set_ylabel(plotting.THETA_LABEL)
+    plotting.full_circle(ax[1])
     ax[2].plot(*env(x[:, 2]), color="C2", label="s_dot (m/s)")
     ax[2].plot(*env(x[:, 3]), color="C3", label="theta_dot (rad/s)")
-    ax[2].legend(loc="upper right")
-    ax[3].step(*env(result.u), where="post", color="C4")
+    ax[2].set_ylabel("rates")
+    ax[3].step(*env(result.u), where="post", color="C4", label="_force")
     ax[3].set_ylabel("force (N)")
-    ax[4].plot(*env(pendulum_energy(result.plant, x.T) / upright_energy(result.plant)), color="C5")
-    ax[4].axhline(1.0, color="k", lw=0.8, ls=":")
+    ax[4].plot(*env(pendulum_energy(result.plant, x.T) / upright_energy(result.plant)), color="C5", label="_E")
+    ax[4].axhline(1.0, color="k", lw=0.8, ls=":", label="upright at rest (E = E0)")
     ax[4].set_ylabel("E / E0")
     ax[4].set_xlabel("t (s)")
-    if result.handoff_time is not None:
-        for a in ax:
-            a.axvline(result.handoff_time, color="k", lw=0.8)
+    for a in ax:
+        if result.handoff_time is not None:
+            a.axvline(result.handoff_time, color="k", lw=0.8, label=f"hand-off {result.handoff_time:.3f} s")
+        plotting.legend_above(a, fontsize=8)
     title = f"pump-up ({result.strategy}), force limit {result.force_limit:g} N"
     if result.handoff_time is not None:
         title += f": hand-off at {result.handoff_time:.3f} s"
-    ax[0].set_title(title)
-    return plotting.rendered(fig, stem, svg, salt="patchgen-swingup")
+    fig.suptitle(title, y=1 - 0.12 / fig.get_figheight())
+    return fig

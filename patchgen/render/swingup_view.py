@@ -24,8 +24,10 @@ def swingup_files(report: SwingupReport, machine: MachineProfile, bench: BenchPr
     prediction, the plots, and manoeuvre.json (the report's summary)."""
     d, m, F, strategy = report.design, report.manoeuvre, report.force_limit_N, report.plan.strategy
     p = m.pump
-    section = SheetSection(f"Pump-up schedule ({strategy}, {F:g} N)", *compact_schedule_rows(p),
-                           "Switch times for the operator or a sequencer, from hanging at rest; hand off (IC -> OP) "
+    kept = report.schedule_note
+    heading = f"Pump-up schedule ({strategy}, {F:g} N)" + (": the optimiser kept its seed" if kept else "")
+    section = SheetSection(heading, *compact_schedule_rows(p), (f"{kept[0].upper()}{kept[1:]}. " if kept else "")
+                           + "Switch times for the operator or a sequencer, from hanging at rest; hand off (IC -> OP) "
                            "when the pendulum is in the zone. Computed for this design's plant model: an open-loop "
                            "schedule is fragile, the supervisory logic re-times itself on the measured states.")
     title = (f"{d.spec.name}: {strategy} pump-up, hand-off at {p.handoff_time or float('nan'):.2f} s, "
@@ -59,6 +61,8 @@ def print_swingup(report: SwingupReport, written: list, console: Console | None 
     for r in rows[1:]:
         t.add_row(*r)
     console.print(t)
+    if report.schedule_note:
+        console.print(f"[yellow]schedule: {report.schedule_note}[/yellow]")
     if p.reached:
         console.print(f"hand-off zone reached at {p.handoff_time:.2f} s, max |s| during pump-up "
                       f"{p.max_abs_s_pump:.3f} m (switches at +/-{plant.d / 2:.3f} m)")

@@ -78,7 +78,7 @@ def _row(args) -> SweepRow:
     changes: dict[str, tuple[float, float]] = {}
     err = None
     try:
-        net = build_patch(d, machine)
+        net = build_patch(d, machine, suggest=False)
         for p in net.pots:
             if p.id in nominal_pots and nominal_pots[p.id] != p.setting:
                 changes[p.id] = (nominal_pots[p.id], p.setting)
@@ -125,7 +125,7 @@ def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float
         raise ValueError("a sweep's predicted outcome simulates the bench: pass the bench profile")
     nominal = design_on(spec, machine, bench)
     try:
-        net = build_patch(nominal, machine)
+        net = build_patch(nominal, machine, suggest=False)
         nominal_pots = {p.id: p.setting for p in net.pots}
     except InputError:
         net, nominal_pots = None, {}

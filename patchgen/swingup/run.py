@@ -70,7 +70,8 @@ def swing_up(
     Returns
     -------
     SwingUpResult
-        The run; for 'schedule' its notes carry the predicted and seed final times.
+        The run; for 'schedule' its notes carry the predicted and seed final times, and whether
+        (and why) the optimiser kept its seed.
     """
     if strategy not in STRATEGIES:
         raise ValueError(f"unknown strategy {strategy!r} (known: {', '.join(STRATEGIES)})")
@@ -86,7 +87,8 @@ def swing_up(
         schedule = optimised_schedule(model, force_limit, zone)
     result = replay(plant, schedule.schedule, zone, force_limit, K, t_max=t_max, hold_s=hold_s, dt=dt)
     result.notes.update(predicted_T_F=schedule.T_F, seed_T_F=schedule.seed_T_F,
-                        optimised=schedule.success, iterations=schedule.iterations)
+                        optimised=schedule.success, iterations=schedule.iterations, kept_seed=schedule.kept_seed,
+                        kept_seed_note=schedule.note())
     return result
 
 

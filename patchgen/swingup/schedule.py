@@ -66,6 +66,14 @@ class OptimisedSchedule:
     message: str
     iterations: int
     constraints: dict = field(default_factory=dict)
+    kept_seed: bool = False  # the switching times returned are the seed's, unchanged
+    why_kept: str = ""  # why, when kept
+
+    def note(self) -> str | None:
+        """What the operator is told when the optimiser kept its seed (None when it moved it)."""
+        if not self.kept_seed:
+            return None
+        return f"the optimiser kept its seed (the supervisory logic's switching table): {self.why_kept}"
 
 
 def schedule_from_result(result: SwingUpResult) -> tuple[Schedule, float]:
@@ -266,15 +274,18 @@ def optimise_schedule(
     feasible = bool(np.all(c >= -1e-4))
     if not feasible:
         d, c = d0, problem.fun(d0)
+    kept = bool(np.array_equal(d, d0))
     starts = np.concatenate([[0.0], np.cumsum(d[:-1])])
     rows = tuple(
-        Switch(s.series, s.phase, s.force_N, round(float(t), 4), "optimised" if feasible else "seed")
+        Switch(s.series, s.phase, s.force_N, round(float(t), 4), "seed" if kept else "optimised")
         for s, t in zip(seed.switches, starts)
     )
+    why = ("" if not kept else "no shorter schedule near it meets the zone and track margins" if feasible
+           else "it misses the zone or track margin, and no schedule near it meets them")
     return OptimisedSchedule(
         schedule=Schedule(rows), T_F=float(np.sum(d)), seed=seed, seed_T_F=seed_T_F,
-        success=feasible and d.sum() < d0.sum(), message=message, iterations=iterations,
-        constraints={"zone": float(c[0]), "track": float(c[1])},
+        success=bool(feasible and d.sum() < d0.sum()), message=message, iterations=iterations,
+        constraints={"zone": float(c[0]), "track": float(c[1])}, kept_seed=kept, why_kept=why,
     )
 
 

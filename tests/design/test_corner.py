@@ -105,12 +105,12 @@ def test_choose_is_the_grid_minimum():
     assert got.tried == len(grid)
 
 
-def test_choose_takes_the_next_best_the_check_accepts():
+def test_choose_takes_the_next_best_the_margin_allows():
     d, noise, grid, build, scores = _grid_case()
     order = np.argsort(scores)
     refused = grid[order[0]]
-    accept = lambda c: not np.isclose(c.Ac[0, 0], -1.0 / refused, rtol=1e-12)
-    got = corner.choose(d.model, d.K, build, noise, grid, accept)
+    margin = lambda c: 10.0 if np.isclose(c.Ac[0, 0], -1.0 / refused, rtol=1e-12) else 45.0
+    got = corner.choose(d.model, d.K, build, noise, grid, margin)
     assert got.value == float(f"{grid[order[1]]:.3g}")
     assert got.force_error_rms_N == pytest.approx(scores[order[1]], rel=1e-12)
 
@@ -126,8 +126,10 @@ def test_choose_skips_values_the_builder_refuses_and_says_when_none_pass():
 
     got = corner.choose(d.model, d.K, picky, noise, grid)
     assert got.force_error_rms_N == pytest.approx(sorted(scores)[1], rel=1e-12)
-    with pytest.raises(ValueError, match="30 deg of phase margin"):
-        corner.choose(d.model, d.K, build, noise, grid, lambda c: False)
+    with pytest.raises(ValueError, match="30 deg of phase margin") as refused:
+        corner.choose(d.model, d.K, build, noise, grid, lambda c: None)  # no loop stable
+    assert refused.value.scored and all(s.pm_deg is None for s in refused.value.scored)
+    assert refused.value.fallbacks() == [] and "the most is" not in str(refused.value)
 
 
 def test_the_shipped_roll_off_is_the_least_error_among_robust_loops():

@@ -71,7 +71,7 @@ def test_plant_zeros(case1):
 
 
 def test_kalman_gain_at_rho_1():
-    from patchgen.design.lqg import kalman_gain
+    from patchgen.design.ltr import kalman_gain
 
     spec = load_spec(design_path("thesis-case1"))
     d = design(spec)

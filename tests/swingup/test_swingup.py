@@ -11,7 +11,7 @@ from patchgen.render.swingup_files import output_files, patch_sheet_rows
 from patchgen.swingup.handoff import Zone, default_spread, estimate_zone, lqr_zone, lyapunov_matrix
 from patchgen.swingup.pumping import HOLD_S, PUMP_T_MAX_S, STEP_S, simulate
 from patchgen.swingup.run import swing_up
-from patchgen.swingup.schedule import optimise_schedule, replay, schedule_from_result
+from patchgen.swingup.schedule import ScheduleSettings, optimise_schedule, replay, schedule_from_result
 from patchgen.swingup.strategies import BRAKE, COAST, PUSH, Supervisor, hanging_state, pendulum_energy, upright_energy
 
 pytestmark = pytest.mark.heavy(8)  # seconds, roughly: see tests/conftest.py
@@ -103,6 +103,13 @@ def test_optimised_schedule_no_slower_than_supervisory(zone):
     assert r.handoff_time <= seed_run.handoff_time + 1e-9
     assert r.max_abs_s_pump < HALF_TRACK
     assert r.held
+    # it moved the switches, and says so: no note of a kept seed
+    assert not opt.kept_seed and opt.note() is None and {s.reason for s in opt.schedule.switches} == {"optimised"}
+    assert not np.array_equal(opt.schedule.times, seed.times)
+    # no round allowed: the seed comes back unchanged, and the note says so
+    kept = optimise_schedule(TABLE_B1, zone, seed, T, ScheduleSettings(rounds=0))
+    assert kept.kept_seed and not kept.success and {s.reason for s in kept.schedule.switches} == {"seed"}
+    assert np.allclose(kept.schedule.times, seed.times, atol=1e-4) and "kept its seed" in kept.note()
 
 
 def test_outputs_are_deterministic(supervisory):

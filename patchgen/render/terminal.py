@@ -79,3 +79,19 @@ def listed(items: Iterable[str], most: int, what: str = "more") -> str:
     items = list(items)
     shown = ", ".join(items[:most])
     return shown if len(items) <= most else f"{shown} and {len(items) - most} {what}"
+
+
+def say(*lines: str, err: bool = False) -> None:
+    """Plain lines (no markup) on stdout, or stderr with ``err``, wrapped at the console's width."""
+    console = Console(stderr=err)
+    for line in lines:
+        console.print(line, markup=False, highlight=False)
+
+
+def print_listing(rows: list[tuple[str, str]]) -> None:
+    """Two columns without a header (a name, then words that wrap under themselves)."""
+    t = table(None, text(""), text(""))
+    t.show_header = False
+    for a, b in rows:
+        add_row(t, a, b)
+    Console().print(t)

@@ -12,6 +12,7 @@ import math
 import click
 
 from patchgen.inputs.errors import InputError
+from patchgen.inputs.resources import shipped
 from patchgen.studies.sweep import VARIABLE
 
 SEED = click.IntRange(0, 2**63 - 1)  # numpy's generators take a non-negative 64-bit seed
@@ -45,6 +46,11 @@ FORCE = click.option("--force", is_flag=True, help="Replace output files that al
 SCENARIO = click.option("--scenario", "scenario_path", required=True,
                         help="Scenario: a shipped name (hold-120s, offset-10deg, ...; patchgen examples copies "
                              "them) or a TOML file.")
+
+# another machine than the spec's: every command that patches takes it (patchgen.pipeline.inputs.load_inputs)
+MACHINE = click.option("--machine", "machine", default=None, metavar="MACHINE",
+                       help=f"Machine to patch instead of the spec's: a shipped one ({', '.join(shipped('machine'))}) "
+                            "or a machine profile's TOML file.")
 
 
 def bench_option(extra: str = ""):

@@ -43,9 +43,9 @@ def seed_option(default: int | None, what: str):
 FORCE = click.option("--force", is_flag=True, help="Replace output files that already exist.")
 
 # a scenario the command must be given
-SCENARIO = click.option("--scenario", "scenario_path", required=True,
-                        help="Scenario: a shipped name (hold-120s, offset-10deg, ...; patchgen examples copies "
-                             "them) or a TOML file.")
+SCENARIO = click.option("--scenario", "scenario_path", required=True, metavar="SCENARIO",
+                        help=f"Scenario: a TOML file, or a shipped one by name ({', '.join(shipped('scenario'))}; "
+                             "patchgen examples copies them out to edit).")
 
 # another machine than the spec's: every command that patches takes it (patchgen.pipeline.inputs.load_inputs)
 MACHINE = click.option("--machine", "machine", default=None, metavar="MACHINE",

@@ -22,8 +22,9 @@ def kind(error: str) -> str:
                                                         ("integrators", need_int, have_int),
                                                         ("pots", need_pot, have_pot)) if int(need) > int(have)]
         if short:
-            return (f"do not fit: the patch needs more {' and '.join(w for w, _ in short)} than {machine} has "
-                    f"({', '.join(h for _, h in short)})")
+            what = [w for w, _ in short]
+            what = ", ".join(what[:-1]) + " and " + what[-1] if len(what) > 1 else what[0]
+            return f"do not fit: the patch needs more {what} than {machine} has ({', '.join(h for _, h in short)})"
     return _NUMBER.sub("#", error)
 
 

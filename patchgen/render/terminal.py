@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Iterable
 
 from rich import box
 from rich.console import Console
@@ -72,13 +71,6 @@ def show(console: Console, t: Table) -> None:
         console.print(t)
     finally:
         t.title = title
-
-
-def listed(items: Iterable[str], most: int, what: str = "more") -> str:
-    """``items`` joined by commas, at most ``most`` of them, then how many more there are."""
-    items = list(items)
-    shown = ", ".join(items[:most])
-    return shown if len(items) <= most else f"{shown} and {len(items) - most} {what}"
 
 
 def say(*lines: str, err: bool = False) -> None:

@@ -75,19 +75,23 @@ def cli() -> None:
     """From an optimal cart-pendulum controller to a checked Comdyna GP-6 patch.
 
     \b
-    patchgen design SPEC                 LQR / Kalman / LTR design and its margins
-    patchgen patch SPEC -o DIR           netlist, pot table, patch sheet, wiring diagram
-    patchgen simulate SPEC --scenario X -o DIR   the patched circuit on the bench
-    patchgen spice SPEC --scenario X -o DIR      the patch checked by ngspice
-    patchgen recommend SPEC -o DIR       every realisation on the bench, the best patch
-    patchgen swingup SPEC -o DIR         pump-up, hand-off, hold with the patch
-    patchgen sweep SPEC                  gains, margins, pots with parameters off by 10%
-    patchgen bench-test SPEC -o DIR      recordings of the standard bench tests
-    patchgen identify DIR -o OUT         a bench profile and the plant from recordings
-    patchgen examples DIR                copy the shipped designs and scenarios to edit
+    patchgen design SPEC              LQR / Kalman / LTR design and its margins
+    patchgen patch SPEC -o DIR        netlist, pot table, patch sheet, wiring
+    patchgen check SPEC --readings F  static check readings: agree, or the fault
+    patchgen simulate SPEC --scenario X -o DIR    the patched circuit on the bench
+    patchgen spice SPEC --scenario X -o DIR       the patch checked by ngspice
+    patchgen recommend SPEC -o DIR    every realisation on the bench, the best
+    patchgen swingup SPEC -o DIR      pump-up, hand-off, hold with the patch
+    patchgen sweep SPEC               gains, margins, pots with parameters off 10%
+    patchgen bench-test SPEC -o DIR   recordings of the standard bench tests
+    patchgen identify DIR -o OUT      bench profile and plant from recordings
+    patchgen examples DIR             the shipped designs and scenarios to edit
 
+    \b
     SPEC is a TOML file or a shipped design by name (bench-recommended,
-    thesis-ch5, thesis-case1, ...); --scenario likewise (hold-120s, ...).
+    thesis-ch5, thesis-case1, ...); --scenario likewise (hold-120s, ...);
+    --machine another machine than the spec's (gp6, the-analog-thing, or
+    a machine profile's TOML file).
     """
 
 

@@ -30,6 +30,7 @@ def bench_test_cmd(spec, out_dir, bench_name, seed, as_json, force) -> None:
     from patchgen.pipeline.inputs import load_inputs
     from patchgen.profiles.bench import load_bench
     from patchgen.render.outputs import check_out_dir, json_text, write_files
+    from patchgen.render.terminal import say
 
     check_out_dir(out_dir, FILES, force)
     inputs = load_inputs(spec)
@@ -40,5 +41,5 @@ def bench_test_cmd(spec, out_dir, bench_name, seed, as_json, force) -> None:
     if as_json:
         click.echo(json_text(report.summary(written)), nl=False)
         return
-    click.echo(f"wrote {len(written)} recordings of {report.spec} on bench {report.bench} (seed {seed}) into "
-               f"{out_dir}; next: patchgen identify {out_dir} -o OUT")
+    say(f"wrote {len(written)} recordings of {report.spec} on bench {report.bench} (seed {seed}) into {out_dir}",
+        f"next: patchgen identify {out_dir} -o OUT")

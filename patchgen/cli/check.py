@@ -14,7 +14,7 @@ from patchgen.render.check_view import print_verdict
 from patchgen.render.outputs import json_text
 
 from . import cli
-from .options import json_option
+from .options import MACHINE, json_option
 
 DISAGREE_STATUS = 1  # the readings point at a fault
 
@@ -23,8 +23,9 @@ DISAGREE_STATUS = 1  # the readings point at a fault
 @click.argument("spec")
 @click.option("--readings", "readings_path", required=True, metavar="FILE",
               help="static-check.csv as patchgen patch wrote it, with the measured_V column filled in.")
+@MACHINE
 @json_option("the verdict and the faults")
-def check_cmd(spec: str, readings_path: str, as_json: bool) -> None:
+def check_cmd(spec: str, readings_path: str, machine: str | None, as_json: bool) -> None:
     """Compare a filled static check with SPEC's patch and name the likeliest wrong pot, cord or sign.
 
     Exit 0 when every reading agrees with its expected value within its tolerance, 1 when not
@@ -32,7 +33,7 @@ def check_cmd(spec: str, readings_path: str, as_json: bool) -> None:
     """
     if not readings_path:
         raise InputError("--readings", "", "is an empty file name: give the filled static-check.csv")
-    report = run_check(load_inputs(spec), readings_path)
+    report = run_check(load_inputs(spec, machine=machine), readings_path)
     if as_json:
         click.echo(json_text(report.summary()), nl=False)
     else:

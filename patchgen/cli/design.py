@@ -10,15 +10,16 @@ from patchgen.render.design_tables import print_design
 from patchgen.render.outputs import json_text
 
 from . import cli
-from .options import json_option
+from .options import MACHINE, json_option
 
 
 @cli.command("design")
 @click.argument("spec")
+@MACHINE
 @json_option("the design as one object")
-def design_cmd(spec: str, as_json: bool) -> None:
+def design_cmd(spec: str, machine: str | None, as_json: bool) -> None:
     """Compute the LQR gain, Kalman estimator, loop transfer recovery and loop margins of SPEC."""
-    report = run_design(load_inputs(spec))
+    report = run_design(load_inputs(spec, machine=machine))
     if as_json:
         click.echo(json_text(report.summary()), nl=False)
     else:

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from patchgen.inputs.resources import EXAMPLES, example_files, shipped
 from patchgen.render.outputs import json_text, write_files
+from patchgen.render.terminal import print_listing, say
 
 from . import cli
 from .options import FORCE, json_option
@@ -23,7 +26,7 @@ def examples_cmd(out_dir: str, force: bool, as_json: bool) -> None:
         click.echo(json_text({"copied": {sub: list(shipped(kind)) for kind, sub in EXAMPLES.items()},
                               "written": [str(p) for p in written]}), nl=False)
         return
-    for kind, sub in EXAMPLES.items():
-        click.echo(f"{sub + '/':10} {', '.join(shipped(kind))}")
-    click.echo(f"wrote {len(written)} files into {out_dir}; try: patchgen patch {out_dir}/designs/"
-               f"{shipped('design')[0]}.toml -o {out_dir}/patch")
+    print_listing([(f"{sub}/", ", ".join(shipped(kind))) for kind, sub in EXAMPLES.items()])
+    design = "bench-recommended" if "bench-recommended" in shipped("design") else shipped("design")[0]
+    say(f"wrote {len(written)} files into {out_dir}; try:",
+        f"  patchgen patch {Path(out_dir) / 'designs' / design}.toml -o {Path(out_dir) / 'patch'}")

@@ -12,6 +12,7 @@ import math
 import click
 
 from patchgen.inputs.errors import InputError
+from patchgen.inputs.resources import shipped
 from patchgen.studies.sweep import VARIABLE
 
 SEED = click.IntRange(0, 2**63 - 1)  # numpy's generators take a non-negative 64-bit seed
@@ -42,9 +43,14 @@ def seed_option(default: int | None, what: str):
 FORCE = click.option("--force", is_flag=True, help="Replace output files that already exist.")
 
 # a scenario the command must be given
-SCENARIO = click.option("--scenario", "scenario_path", required=True,
-                        help="Scenario: a shipped name (hold-120s, offset-10deg, ...; patchgen examples copies "
-                             "them) or a TOML file.")
+SCENARIO = click.option("--scenario", "scenario_path", required=True, metavar="SCENARIO",
+                        help=f"Scenario: a TOML file, or a shipped one by name ({', '.join(shipped('scenario'))}; "
+                             "patchgen examples copies them out to edit).")
+
+# another machine than the spec's: every command that patches takes it (patchgen.pipeline.inputs.load_inputs)
+MACHINE = click.option("--machine", "machine", default=None, metavar="MACHINE",
+                       help=f"Machine to patch instead of the spec's: a shipped one ({', '.join(shipped('machine'))}) "
+                            "or a machine profile's TOML file.")
 
 
 def bench_option(extra: str = ""):

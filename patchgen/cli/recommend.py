@@ -17,7 +17,7 @@ from patchgen.render.recommendation_files import RECOMMEND_FILES, recommendation
 from patchgen.studies.recommend import RUNS
 
 from . import cli
-from .options import FORCE, bench_option, json_option, out_option, seed_option
+from .options import FORCE, MACHINE, bench_option, json_option, out_option, seed_option
 
 NONE_CHOSEN_STATUS = 1  # the comparison is written, but no realisation holds on the bench
 
@@ -35,9 +35,10 @@ NONE_CHOSEN_STATUS = 1  # the comparison is written, but no realisation holds on
               "stop once a realisation clearly holds or fails).")
 @bench_option("when it states ranges for its parameters, every run draws its bench from them and the worst "
               "corner is checked.")
+@MACHINE
 @json_option("the comparison")
 @FORCE
-def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_name, as_json, force):
+def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_name, machine, as_json, force):
     """Run every realisation of SPEC on the bench in every scenario; write the best patch and its spec.
 
     The realisations: every estimator, and each again designed with the bench's actuator when
@@ -49,7 +50,7 @@ def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_nam
     of every scenario, variants included.
     """
     check_out_dir(out_dir, RECOMMEND_FILES, force)
-    inputs = load_inputs(spec, bench_name, "--bench")
+    inputs = load_inputs(spec, bench_name, "--bench", machine)
     if bench_name is not None:  # the recommended spec names the bench it was chosen on
         inputs = inputs._replace(spec=inputs.spec.model_copy(update={"bench": bench_name}))
     scenarios = tuple(scenario_for(p, inputs.spec, runs).judged()

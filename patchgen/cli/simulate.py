@@ -12,7 +12,7 @@ from patchgen.render.simulate_view import print_report, progress_bar
 from patchgen.render.simulation_files import output_files
 
 from . import cli
-from .options import FORCE, SCENARIO, bench_option, json_option, out_option, seed_option, svg_option
+from .options import FORCE, MACHINE, SCENARIO, bench_option, json_option, out_option, seed_option, svg_option
 
 SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "history.svg", "netlist.json")
 
@@ -31,6 +31,7 @@ SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "his
               "fraction of the spec's values (e.g. 10%).")
 @click.option("--vary", default="M,m,l,b_VF,c", show_default=True, help="Parameters --spread draws.")
 @bench_option()
+@MACHINE
 @click.option("--bench-spread", is_flag=True, help="Monte Carlo over the bench too: each run draws the bench's "
               "parameters from the profile's [uncertainty] ranges; the summary adds the corners of the ranges "
               "and the worst (searched for past three ranges).")
@@ -39,8 +40,8 @@ SIMULATE_FILES = ("history.csv", "runs.csv", "summary.json", "history.png", "his
 @svg_option("the plot (history.svg)")
 @json_option("the summary (summary.json)")
 @FORCE
-def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, bench_name, bench_spread,
-                 corner_runs, svg, as_json, force) -> None:
+def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, vary, bench_name, machine,
+                 bench_spread, corner_runs, svg, as_json, force) -> None:
     """Simulate SPEC's patched circuit (built from its netlist) on the bench."""
     spread = None
     if spread_text is not None:
@@ -50,7 +51,7 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
         spread = {name: frac for name in parse_vary(vary)}
     check_out_dir(out_dir, SIMULATE_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one simulates
-    inputs = load_inputs(spec, bench_name, "--bench")
+    inputs = load_inputs(spec, bench_name, "--bench", machine)
     scenario = scenario_for(scenario_path, inputs.spec, runs, ideal)
     plan = SimulatePlan(runs=runs, seed=seed, ideal=ideal, spread=spread, bench_spread=bench_spread,
                         corner_runs=corner_runs)

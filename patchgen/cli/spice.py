@@ -15,7 +15,7 @@ from patchgen.render.spice_view import deck_files, print_spice, spice_files
 from patchgen.spice.run import NgspiceError, NgspiceMissing
 
 from . import cli
-from .options import FORCE, SCENARIO, FiniteFloat, json_option, out_option, svg_option
+from .options import FORCE, MACHINE, SCENARIO, FiniteFloat, json_option, out_option, svg_option
 
 SPICE_FILES = ("patch.cir", "patch.data", "comparison.json", "overlay.png", "overlay.svg")
 
@@ -32,16 +32,17 @@ NO_NGSPICE_STATUS = NgspiceMissing.exit_status
               help="Output step of the transient (s).")
 @click.option("--tolerance", type=FiniteFloat(0, 1), default=0.01, show_default=True,
               help="Agreement required, as a fraction of each signal's peak.")
+@MACHINE
 @svg_option("the overlay plot (overlay.svg)")
 @json_option("the comparison")
 @FORCE
-def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, svg, as_json, force) -> None:
+def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, machine, svg, as_json, force) -> None:
     """Export SPEC's patch and the bench as an ngspice deck, run it, and compare with patchgen's own
     simulation of the same scenario. Exit 0 when they agree within --tolerance, 1 when not,
     3 without ngspice (the deck is still written)."""
     check_out_dir(out_dir, SPICE_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while ngspice runs
-    inputs = load_inputs(spec)
+    inputs = load_inputs(spec, machine=machine)
     scenario = scenario_for(scenario_path, inputs.spec, 1, ideal)
     check_spice_points(scenario, step_s)
     job = spice_job(inputs, scenario, SpicePlan(ideal=ideal, step_s=step_s, tolerance=tolerance))

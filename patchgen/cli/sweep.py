@@ -11,7 +11,7 @@ from patchgen.render.outputs import json_text
 from patchgen.render.sweep_view import print_sweep
 
 from . import cli
-from .options import json_option, parse_by, parse_vary
+from .options import MACHINE, json_option, parse_by, parse_vary
 
 
 @cli.command("sweep")
@@ -24,12 +24,14 @@ from .options import json_option, parse_by, parse_vary
               help="Scenario (shipped name or TOML file) for the nominal patch's predicted outcome.")
 @click.option("--runs", type=click.IntRange(1, 10000), default=1, show_default=True,
               help="Noise seeds per row for the predicted outcome.")
+@MACHINE
 @json_option("the rows")
-def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: str, runs: int, as_json: bool) -> None:
+def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: str, runs: int,
+              machine: str | None, as_json: bool) -> None:
     """Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2): the gains, the
     margins, the pots that would change, and how the nominal patch (as wired) does on that plant."""
     plan = SweepPlan(tuple(parse_vary(vary)), parse_by(by_text), workers, runs)
-    inputs = load_inputs(spec)
+    inputs = load_inputs(spec, machine=machine)
     scenario = scenario_for(scenario_path, inputs.spec, runs)  # a bad scenario fails here, in one line
     report = run_sweep(inputs, scenario, plan)
     if as_json:

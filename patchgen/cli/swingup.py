@@ -14,7 +14,7 @@ from patchgen.swingup.manoeuvre import BENCH_HOLD_S
 from patchgen.swingup.strategies import STRATEGIES
 
 from . import cli
-from .options import FORCE, FiniteFloat, json_option, out_option, seed_option, svg_option
+from .options import FORCE, MACHINE, FiniteFloat, json_option, out_option, seed_option, svg_option
 
 SWINGUP_FILES = PATCH_FILES + ("swingup-history.csv", "swingup-switching.csv", "swingup-switching.md", "swingup.png",
                                "swingup.svg", "manoeuvre.png", "manoeuvre.svg", "manoeuvre.json")
@@ -33,16 +33,17 @@ SWINGUP_FILES = PATCH_FILES + ("swingup-history.csv", "swingup-switching.csv", "
 @seed_option(0, "Noise seed of the hold.")
 @click.option("--compare", is_flag=True, help="Also compare the three strategies (time to the zone, cart "
               "excursion, success on plants off by +/-10%); takes about a minute.")
+@MACHINE
 @svg_option("the plots")
 @json_option("the summary (manoeuvre.json)")
 @FORCE
-def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, svg, as_json, force) -> None:
+def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, machine, svg, as_json, force) -> None:
     """Pump SPEC's pendulum up from hanging at rest, hand it to the patched controller when the state
     enters the zone of the linear design, and hold it on the bench (actuator lag and dead zone,
     noise, drift)."""
     check_out_dir(out_dir, SWINGUP_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one computes
-    inputs = load_inputs(spec)
+    inputs = load_inputs(spec, machine=machine)
     plan = SwingupPlan(strategy=strategy, force_limit_N=force_limit, hold_s=hold_s, seed=seed, compare=compare)
     report = run_swingup(inputs, plan, comparing=comparing)
     files = swingup_files(report, inputs.machine, inputs.bench, svg)

@@ -4,10 +4,12 @@ the simulation bounds). Every pipeline function takes them resolved; no stage re
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import NamedTuple
 
 from patchgen.bench import budget
 from patchgen.inputs.errors import InputError
+from patchgen.inputs.resources import folder, resolve
 from patchgen.inputs.scenario import Scenario, check_on_track, load_scenario
 from patchgen.inputs.spec import DesignSpec, load_spec
 from patchgen.profiles.bench import BenchProfile, bench_source, check_reads, load_bench
@@ -24,7 +26,8 @@ class Inputs(NamedTuple):
     bench: BenchProfile
 
 
-def load_inputs(path: str, bench: str | None = None, bench_source_name: str = "bench") -> Inputs:
+def load_inputs(path: str, bench: str | None = None, bench_source_name: str = "bench",
+                machine: str | None = None) -> Inputs:
     """The spec and the machine and bench profiles it names, each fully checked.
 
     Parameters
@@ -35,12 +38,22 @@ def load_inputs(path: str, bench: str | None = None, bench_source_name: str = "b
         A bench profile (a shipped id or a path) replacing the spec's.
     bench_source_name : str
         What ``bench`` is called in an error about it (the option that gave it).
+    machine : str, optional
+        A machine profile (a shipped id or a path) replacing the spec's ``machine``, in the spec
+        too (a file by its absolute path), so that every later stage and a spec written from it
+        (recommend's recommended.toml) name it; an error about it is the field ``machine``'s.
     """
     spec = load_spec(path)
     name, source, field = (bench, bench_source_name, "") if bench is not None else (spec.bench, spec.path, "bench")
     profile = load_bench(name, source, field)
     check_reads(profile, spec.sensors.read(), bench_source(name, source, field))
-    return Inputs(spec, load_machine(spec.machine, spec.path), profile)
+    if machine is None:
+        return Inputs(spec, load_machine(spec.machine, spec.path), profile)
+    chosen = load_machine(machine, "machine", "")
+    found = resolve("machine", machine, "machine", "")
+    own = isinstance(found, Path) and found != folder("machine").joinpath(f"{machine}.toml")  # not a shipped id
+    named = str(found.absolute()) if own else machine
+    return Inputs(spec.model_copy(update={"machine": named}), chosen, profile)
 
 
 def scenario_for(path: str, spec: DesignSpec, runs: int = 1, ideal: bool = False) -> Scenario:

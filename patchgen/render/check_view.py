@@ -5,11 +5,11 @@ from __future__ import annotations
 
 from rich.console import Console
 from rich.markup import escape
-from rich.table import Table
 
 from patchgen.patch.fault_finding import Verdict
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.static_check import StaticCheck
+from patchgen.render.terminal import add_row, number, show, table, text
 
 
 def print_verdict(net: Netlist, check: StaticCheck, verdict: Verdict, console: Console | None = None) -> None:
@@ -21,12 +21,11 @@ def print_verdict(net: Netlist, check: StaticCheck, verdict: Verdict, console: C
     else:
         console.print(f"[red]{len(verdict.mismatched)} of {len(check.readings)} readings disagree[/red]: "
                       + escape(", ".join(verdict.mismatched)))
-        t = Table(title="Likeliest faults (one at a time), best first", title_justify="left")
-        for col in ("rank", "fault", "explains", "chi-square"):
-            t.add_column(col, justify="left" if col == "fault" else "right")
+        t = table("Likeliest faults (one at a time), best first", number("rank"), text("fault"),
+                  number("explains"), number("chi-square"))
         for k, f in enumerate(verdict.faults, 1):
-            t.add_row(str(k), escape(f.description), f"{f.explained} of {f.of}", f"{f.score:.3g}")
-        console.print(t)
+            add_row(t, str(k), escape(f.description), f"{f.explained} of {f.of}", f"{f.score:.3g}")
+        show(console, t)
         if sum(f.consistent for f in verdict.faults) > 1:
             console.print("[yellow]more than one fault explains every reading:[/yellow] the static check cannot "
                           "tell them apart; check each in turn")

@@ -10,6 +10,7 @@ from patchgen.design.lqg import Design
 from patchgen.design.margins import Margins
 from patchgen.design.precision import gain_text, significant_digits
 from patchgen.design.report import design_notes
+from patchgen.render.terminal import add_row, figure, number, show, table, text
 
 REPORT_DIGITS = 7  # significant digits of a gain in the report (the thesis prints -249.4119)
 SMALL_POLE = 1e-3  # 1/s: a pole nearer the origin than this prints in significant digits, not four decimals
@@ -17,7 +18,7 @@ REAL_POLE = 1e-9  # 1/s: an imaginary part below this is rounding; the pole prin
 
 
 def _f(x: float | None, fmt: str = ".4g") -> str:
-    return "inf" if x is None else format(x, fmt)
+    return "inf" if x is None else figure(x, "{:" + fmt + "}")
 
 
 def _poles(ps) -> str:
@@ -34,19 +35,19 @@ def _poles(ps) -> str:
 
 
 def margins_table(rows: list[tuple[str, Margins | None]], title: str = "Loop margins at the plant input") -> Table:
-    """One row per named loop (those without margins left out) for the terminal."""
-    t = Table(title=title, title_justify="left")
-    for col in ("loop", "lower GM", "upper GM", "PM (deg)", "at (rad/s)", "delay margin (s)"):
-        t.add_column(col, justify="right" if col != "loop" else "left")
+    """One row per named loop (those without margins left out) for the terminal; a gain margin
+    as the factor over its value in dB."""
+    t = table(title, text("loop"), number("lower GM"), number("upper GM"), number("PM (deg)"),
+              number("at (rad/s)"), number("delay (s)"))
     for name, m in rows:
         if m is None:
             continue
         if not m.stable:
-            t.add_row(name, "unstable", "", "", "", "")
+            add_row(t, name, "unstable", "", "", "", "")
             continue
-        low = "none" if m.lower_gm is None else f"{m.lower_gm:.4f} ({m.lower_gm_db:+.2f} dB)"
-        up = "inf" if m.upper_gm is None else f"{m.upper_gm:.4f} ({m.upper_gm_db:+.2f} dB)"
-        t.add_row(name, low, up, _f(m.pm_deg, ".2f"), _f(m.pm_freq, ".3g"), _f(m.delay_margin_s, ".4f"))
+        low = "none" if m.lower_gm is None else f"{m.lower_gm:.4f}\n{m.lower_gm_db:+.2f} dB"
+        up = "inf" if m.upper_gm is None else f"{m.upper_gm:.4f}\n{m.upper_gm_db:+.2f} dB"
+        add_row(t, name, low, up, _f(m.pm_deg, ".2f"), _f(m.pm_freq, ".3g"), _f(m.delay_margin_s, ".4f"))
     return t
 
 
@@ -61,55 +62,47 @@ def print_design(d: Design, console: Console | None = None) -> None:
                   + (f", tau = {spec.actuator.tau} s" if spec.actuator.model != "gain" else ""))
     for note in design_notes(d):
         console.print(f"[yellow]note:[/yellow] {note}")
-    g = Table(title="LQR gain (u = -K x, force in N)", title_justify="left")
-    g.add_column("state")
-    g.add_column("Q", justify="right")
-    g.add_column("K", justify="right")
+    g = table("LQR gain (u = -K x, force in N)", text("state"), number("Q"), number("K"))
     cut = []
     for i, s in enumerate(d.states):
-        text, flagged = gain_text(float(d.K[0, i]), float(d.spread.K[0, i]), REPORT_DIGITS)
-        g.add_row(s, f"{d.Q[i, i]:g}", text + (" *" if flagged else ""))
+        gain, flagged = gain_text(float(d.K[0, i]), float(d.spread.K[0, i]), REPORT_DIGITS)
+        add_row(g, s, f"{d.Q[i, i]:g}", gain + (" *" if flagged else ""))
         if flagged:
             n = significant_digits(float(d.K[0, i]), float(d.spread.K[0, i]))
             cut.append(f"{s} to {n} significant digits" if n else f"{s} not beyond its size")
-    console.print(g)
+    show(console, g)
     if cut:
         console.print(f"[yellow]*[/yellow] the Riccati equation fixes {'; '.join(cut)} (a nearly uncontrollable "
                       f"mode), fewer than the {REPORT_DIGITS} printed elsewhere: further digits would follow the "
                       "machine's arithmetic, not the design")
     console.print(f"R = {d.R[0, 0]:g}")
-    p = Table(title="Poles and zeros", title_justify="left")
-    p.add_column("")
-    p.add_column("values")
-    p.add_row("open loop", _poles(d.open_loop_poles))
-    p.add_row("closed loop (A - B K)", _poles(d.closed_loop_poles))
+    p = table("Poles and zeros", text(""), text("values"))
+    add_row(p, "open loop", _poles(d.open_loop_poles))
+    add_row(p, "closed loop (A - B K)", _poles(d.closed_loop_poles))
     for k, v in d.zeros.items():
-        p.add_row(f"zeros of {k}", _poles(v))
+        add_row(p, f"zeros of {k}", _poles(v))
     if d.estimator is not None:
-        p.add_row(f"estimator ({d.estimator.kind})", _poles(d.estimator.poles))
-    console.print(p)
+        add_row(p, f"estimator ({d.estimator.kind.replace('_', ' ')})", _poles(d.estimator.poles))
+    show(console, p)
     e = d.estimator
     if e is not None and e.kind == "kalman":
-        L = Table(title=f"Kalman gain L (rho = {e.rho:g}); columns s, theta, s_dot", title_justify="left")
-        L.add_column("state")
-        for m in d.model.measured:
-            L.add_column(m, justify="right")
+        L = table(f"Kalman gain L (rho = {e.rho:g}); columns s, theta, s_dot", text("state"),
+                  *(number(m) for m in d.model.measured))
         for i, s in enumerate(e.states):
-            L.add_row(s, *(f"{v:.4f}" for v in e.L[i]))
-        console.print(L)
+            add_row(L, s, *(f"{v:.4f}" for v in e.L[i]))
+        show(console, L)
         if len(e.rho_tries) > 1 or spec.estimator.rho == "auto":
-            r = Table(title="Loop transfer recovery: rho tries (within 1 dB / 5 deg of LQR?)", title_justify="left")
-            for col in ("rho", "lower GM (dB)", "upper GM (dB)", "PM (deg)", "accepted"):
-                r.add_column(col, justify="right")
+            r = table("Loop transfer recovery: rho tries (within 1 dB / 5 deg of LQR?)",
+                      *(number(c) for c in ("rho", "lower GM (dB)", "upper GM (dB)", "PM (deg)", "accepted")))
             for t in e.rho_tries:
                 m = t.margins
-                r.add_row(f"{t.rho:g}", _f(m.lower_gm_db, ".2f"), _f(m.upper_gm_db, ".2f"), _f(m.pm_deg, ".2f"),
-                          "yes" if t.accepted else "no")
-            console.print(r)
+                add_row(r, f"{t.rho:g}", _f(m.lower_gm_db, ".2f"), _f(m.upper_gm_db, ".2f"), _f(m.pm_deg, ".2f"),
+                        "yes" if t.accepted else "no")
+            show(console, r)
     rows = [("LQR", d.lqr_margins)]
     if e is not None and e.kind == "kalman":
         rows.append(("LQG (rho = 1)", e.margins_rho1))
         rows.append((f"LQG + LTR (rho = {e.rho:g})", d.lqg_margins))
     elif e is not None:
         rows.append((f"differentiator (roll-off {e.rolloff_s:g} s)", d.lqg_margins))
-    console.print(margins_table(rows))
+    show(console, margins_table(rows))

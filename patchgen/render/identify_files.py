@@ -4,13 +4,15 @@ plot per recording; and identify on the terminal."""
 
 from __future__ import annotations
 
-import click
+from rich.console import Console
+from rich.markup import escape
 
 from patchgen.identify.identify import Identification
 from patchgen.identify.profile import bench_toml, plant_toml
 from patchgen.profiles.bench import BenchProfile
 from patchgen.render.identify_plots import fit_plot, plot_name
 from patchgen.render.identify_report import report_json, report_markdown
+from patchgen.render.terminal import add_row, number, show, table, text
 
 FIXED = ("bench.toml", "plant.toml", "report.md", "report.json")
 
@@ -51,13 +53,19 @@ def identify_files(result: Identification, files: list[str], base: BenchProfile,
     return out
 
 
-def print_identification(result: Identification, written: list, out_dir: str) -> None:
+def print_identification(result: Identification, written: list, out_dir: str,
+                         console: Console | None = None) -> None:
     """The warnings on stderr, then each identified figure with its 95 % interval (or where it came
     from), and the files written."""
+    console = console or Console()
+    warn = Console(stderr=True)
     for w in result.warnings:
-        click.echo(f"warning: {w}", err=True)
+        warn.print(f"warning: {escape(w)}", highlight=False)
+    t = table("Identified (95 % intervals; what was not identified, from where it came)", text("parameter"),
+              number("value"), text("unit"), text("95 % interval or from"))
     for key, p in list(result.bench.items()) + list(result.plant.items()):
         e = p.estimate
         shown = p.value if isinstance(p.value, str) else f"{p.value:.5g}"
-        click.echo(f"{key:32} {shown:>12} {p.unit:9} " + (f"95 %: {e.low:.4g} to {e.high:.4g}" if e else p.origin))
-    click.echo(f"wrote {len(written)} files into {out_dir}")
+        add_row(t, key, shown, p.unit, f"{e.low:.4g} to {e.high:.4g}" if e else escape(p.origin))
+    show(console, t)
+    console.print(f"wrote {len(written)} files into {escape(str(out_dir))}", highlight=False)

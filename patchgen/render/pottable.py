@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 
 from rich.console import Console
 from rich.table import Table
 
 from patchgen.patch.netlist import Netlist
 from patchgen.profiles.machine import MachineProfile, the_machine
+from patchgen.render.terminal import add_row, number, show, table, text
 
 COLUMNS = ("pot", "setting", "signal", "amplifier", "input", "weight", "coefficient", "realized", "error_pct", "note")
 
@@ -18,7 +20,7 @@ def print_patch(net: Netlist, machine: MachineProfile, written: list, console: C
     """The patch on the terminal: its pot table (set as the machine's procedure says), its notes,
     and the files written."""
     console = console or Console()
-    console.print(pot_table(net, machine.procedure.pot_setting))
+    show(console, pot_table(net, machine.procedure.pot_setting))
     for n in net.notes:
         console.print(f"[yellow]note:[/yellow] {n}")
     console.print("wrote " + ", ".join(str(p) for p in written))
@@ -46,14 +48,23 @@ def pots_csv(net: Netlist) -> str:
 
 
 def pot_table(net: Netlist, pot_setting: str) -> Table:
-    """The pot table for the terminal; ``pot_setting`` says how the machine's pots are set (its
-    profile's procedure.pot_setting)."""
-    t = Table(title=f"Pot settings for {net.design} on {the_machine(net.machine_name)} ({pot_setting})",
-              title_justify="left")
-    for c, j in (("pot", "left"), ("setting", "right"), ("signal", "left"), ("into", "left"),
-                 ("coefficient", "right"), ("realised", "right"), ("error", "right")):
-        t.add_column(c, justify=j)
+    """The pot table for the terminal, a row a line at 80 columns; ``pot_setting`` says how the
+    machine's pots are set (its profile's procedure.pot_setting)."""
+    t = table(f"Pot settings for {net.design} on {the_machine(net.machine_name)} ({pot_setting})",
+              text("pot"), number("setting"), text("signal"), text("into"), number("coefficient"),
+              number("realised"), number("error"))
     for r in pot_rows(net):
-        t.add_row(r["pot"], r["setting"], r["signal"], f"{r['amplifier']} {r['input']} (x{r['weight']})",
-                  r["coefficient"], r["realized"], r["error_pct"] + " %" if r["error_pct"] != "inf" else "n/a")
+        add_row(t, r["pot"], r["setting"], r["signal"], _into(r["amplifier"], r["input"], r["weight"]),
+                r["coefficient"], r["realized"], "n/a" if r["error_pct"] == "inf" else _error(float(r["error_pct"])))
     return t
+
+
+def _into(amplifier: str, jack: str, weight: int) -> str:
+    """The amplifier and jack, with the input's weight when the jack's name does not say it (x10a does)."""
+    return f"{amplifier} {jack}" + ("" if re.fullmatch(rf"x{weight}\D*", jack) else f" (x{weight})")
+
+
+def _error(pct: float) -> str:
+    """A pot's error in per cent, three decimals, or three significant digits from 100 % up (pots.csv
+    keeps every decimal)."""
+    return (f"{pct:+.3f}" if abs(pct) < 100 else f"{pct:+.3g}") + " %"

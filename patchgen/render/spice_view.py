@@ -4,12 +4,12 @@ overlay plot and comparison.json from the pipeline's report; the agreement table
 from __future__ import annotations
 
 from rich.console import Console
-from rich.table import Table
 
 from patchgen.pipeline.spice import SpiceJob, SpiceReport
 from patchgen.render import plot_helper
 from patchgen.render.outputs import json_text
 from patchgen.render.spice_plot import comparison_plot
+from patchgen.render.terminal import add_row, number, show, table, text
 from patchgen.spice.deck import OPAMP_MODEL
 
 STATISTICAL = ("the deck draws its own noise, random-force and drift samples (the same levels, another "
@@ -38,14 +38,12 @@ def print_spice(report: SpiceReport, written: list, console: Console | None = No
     console = console or Console()
     job, cmp = report.job, report.comparison
     ideal, tolerance = job.plan.ideal, job.plan.tolerance
-    t = Table(title=f"ngspice against patchgen: {job.design.spec.name}, {job.scenario.name}"
+    t = table(f"ngspice against patchgen: {job.design.spec.name}, {job.scenario.name}"
               + (" (ideal: noise, drift off; ideal actuator; op-amp macromodels)" if ideal else ""),
-              title_justify="left")
-    for c in ("signal", "peak", "RMS difference", "largest difference"):
-        t.add_column(c, justify="right" if c != "signal" else "left")
+              text("signal"), number("peak"), number("RMS difference"), number("largest difference"))
     for k, v in cmp.signals.items():
-        t.add_row(k, f"{v.peak:.4g}", f"{100 * v.rms_rel:.3f} % of peak", f"{100 * v.max_rel:.3f} % of peak")
-    console.print(t)
+        add_row(t, k, f"{v.peak:.4g}", f"{100 * v.rms_rel:.3f} % of peak", f"{100 * v.max_rel:.3f} % of peak")
+    show(console, t)
     console.print(("[green]agree[/green]" if cmp.agrees(tolerance) else "[red]disagree[/red]")
                   + f" within {100 * tolerance:g} % of peak at ngspice's {len(cmp.t)} time points; "
                   f"ngspice ran {report.run_time_s:.2f} s")

@@ -5,7 +5,6 @@ switching table, the hand-off and the hold, the schedule's sensitivity and the s
 from __future__ import annotations
 
 from rich.console import Console
-from rich.table import Table
 
 from patchgen.pipeline.swingup import SwingupReport
 from patchgen.profiles.bench import BenchProfile
@@ -16,6 +15,7 @@ from patchgen.render.manoeuvre_plot import plot_manoeuvre
 from patchgen.render.outputs import json_text
 from patchgen.render.sheet import SheetSection
 from patchgen.render.swingup_files import compact_schedule_rows, output_files, patch_sheet_rows
+from patchgen.render.terminal import add_row, number, show, table, text
 
 
 def swingup_files(report: SwingupReport, machine: MachineProfile, bench: BenchProfile,
@@ -55,12 +55,11 @@ def print_swingup(report: SwingupReport, written: list, console: Console | None 
     m, F, strategy, plant = report.manoeuvre, report.force_limit_N, report.plan.strategy, report.plant
     hold_s, comparison, p = report.plan.hold_s, report.comparison, report.manoeuvre.pump
     rows = patch_sheet_rows(p)
-    t = Table(title=f"Switching table: {strategy}, {F:g} N", title_justify="left")
-    for c in rows[0]:
-        t.add_column(c)
+    t = table(f"Switching table: {strategy}, {F:g} N", text(rows[0][0]), text(rows[0][1]),
+              *(number(c) for c in rows[0][2:]))
     for r in rows[1:]:
-        t.add_row(*r)
-    console.print(t)
+        add_row(t, *r)
+    show(console, t)
     if report.schedule_note:
         console.print(f"[yellow]schedule: {report.schedule_note}[/yellow]")
     if p.reached:
@@ -73,25 +72,23 @@ def print_swingup(report: SwingupReport, written: list, console: Console | None 
     else:
         console.print("[red]the hand-off zone was not reached[/red]")
     if m.sensitivity:
-        s = Table(title="The open-loop schedule replayed on plants with one parameter off by 10%",
-                  title_justify="left")
-        for col in ("parameter", "factor", "reaches the zone", "at (s)", "max |s| (m)", "on the track"):
-            s.add_column(col, justify="left" if col == "parameter" else "right")
+        s = table("The open-loop schedule replayed on plants with one parameter off by 10%", text("parameter"),
+                  *(number(c) for c in ("factor", "reaches the zone", "at (s)", "max |s| (m)", "on the track")))
         for r in m.sensitivity:
-            s.add_row(r.parameter, f"{r.factor:.2f}", "yes" if r.reached else "no", _num(r.time_to_zone_s, "{:.3f}"),
-                      f"{r.max_abs_s_m:.3f}", "yes" if r.on_track else "no")
-        console.print(s)
+            add_row(s, r.parameter, f"{r.factor:.2f}", "yes" if r.reached else "no",
+                    _num(r.time_to_zone_s, "{:.3f}"), f"{r.max_abs_s_m:.3f}", "yes" if r.on_track else "no")
+        show(console, s)
     if comparison:
-        c = Table(title=f"Strategies compared ({F:g} N, zone of the patched controller; success on the "
-                  "10 plants with one parameter off by +/-10%)", title_justify="left")
-        for col in ("strategy", "time to zone (s)", "max |s| (m)", "E/E0 at hand-off", "held (state feedback)",
-                    "robust", "worst time (s)"):
-            c.add_column(col, justify="left" if col == "strategy" else "right")
+        c = table(f"Strategies compared ({F:g} N, zone of the patched controller; robust: of the 10 plants with "
+                  "one parameter off by +/-10%, those on which it reaches the zone inside the switches)",
+                  text("strategy"),
+                  *(number(col) for col in ("time to\nzone (s)", "max |s|\n(m)", "E/E0 at\nhand-off",
+                                            "held (state\nfeedback)", "robust", "worst\ntime (s)")))
         for r in comparison:
-            c.add_row(r.strategy, _num(r.time_to_zone_s, "{:.3f}"), f"{r.max_abs_s_m:.3f}",
-                      _num(r.energy_ratio, "{:.3f}"), "yes" if r.held else "no",
-                      f"{r.robust_reached}/{r.robust_total}", _num(r.worst_time_s, "{:.2f}"))
-        console.print(c)
+            add_row(c, r.strategy, _num(r.time_to_zone_s, "{:.3f}"), f"{r.max_abs_s_m:.3f}",
+                    _num(r.energy_ratio, "{:.3f}"), "yes" if r.held else "no",
+                    f"{r.robust_reached}/{r.robust_total}", _num(r.worst_time_s, "{:.2f}"))
+        show(console, c)
     console.print("wrote " + ", ".join(str(x) for x in written))
 
 

@@ -65,9 +65,9 @@ def test_commands_call_the_pipeline_not_the_stages():
 
 
 def test_shared_options_are_declared_once():
-    """--force, --json, --svg, --seed and --bench come from cli/options.py, not declared per command
-    (bench-test's --bench, a bench to record on, means something else and says so)."""
-    shared = {"--force", "--json", "--svg", "--seed"}
+    """--force, --json, --svg, --seed, --machine and --bench come from cli/options.py, not declared per
+    command (bench-test's --bench, a bench to record on, means something else and says so)."""
+    shared = {"--force", "--json", "--svg", "--seed", "--machine"}
     found = {}
     for name, text in _command_sources().items():
         for node in ast.walk(ast.parse(text)):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -28,8 +29,8 @@ def _design(name: str):
 
 
 def _cells(line: str) -> list[str]:
-    """The non-empty cells of one rendered table row."""
-    return [c.strip() for c in line.split("│") if c.strip()]
+    """The non-empty cells of one rendered table row (columns two spaces apart or more)."""
+    return [c for c in re.split(r"\s{2,}", line.strip()) if c]
 
 
 def _text(renderable) -> str:

@@ -74,7 +74,16 @@ def test_terminal_table_names_the_machine_and_how_pots_are_set(net):
     console = Console(file=io.StringIO(), width=200, record=True)
     console.print(t)
     text = console.export_text()
-    assert "A7 x10a (x10)" in text and "-0.232 %" in text
+    assert "A7 x10a " in text and "(x10)" not in text and "-0.232 %" in text  # x10a says its weight
+
+
+def test_the_terminal_names_the_weight_of_a_jack_whose_name_does_not(net):
+    """A jack named for its weight (x10a) stands alone; one that is not keeps the weight beside it."""
+    first = net.pots[0]
+    odd = net.model_copy(update={"pots": [first.model_copy(update={"jack": "in1"}), *net.pots[1:]]})
+    console = Console(file=io.StringIO(), width=80, record=True)
+    console.print(pot_table(odd, "x"))
+    assert f"{first.amplifier} in1 (x{first.weight})" in console.export_text()
 
 
 def test_a_machine_named_with_its_article_is_not_given_another(net):

@@ -113,7 +113,7 @@ def comparison_table(rec, rows: list[dict], name: str, runs: int) -> Table:
             continue
         what = escape(r["realisation"]) + (f"\n[dim]{escape(r['estimator'])}[/dim]" if r["estimator"] else "")
         if rec.ranges:
-            what += f"\nworst corner: {escape(corner_cell(r))}"
+            what += f"\nworst corner: {escape(corner_cell(r, rec.ranges))}"
         loop = r["bench_loop"] if r["bench_loop"] == "stable" else f"[red]{r['bench_loop']}[/red]"
         verdict = {"holds": "[green]holds[/green]", "fails": "[red]fails[/red]"}.get(r["decision"], r["decision"])
         held = "-" if r["interval_95"] is None else (

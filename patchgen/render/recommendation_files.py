@@ -79,14 +79,22 @@ def held_cell(row: dict) -> str:
     return f"{row['fraction_ok']:.1%} [{lo:.1%}, {hi:.1%}] {row['weakest_scenario']}"
 
 
-def corner_cell(row: dict) -> str:
+def corner_cell(row: dict, ranges: dict[str, tuple[float, float]] | None = None) -> str:
     """The held fraction at the worst corner of the bench's ranges, and the weakest parameter's end
-    ("-" when the bench states no ranges or the candidate was not run at its corners)."""
+    ("-" when the bench states no ranges or the candidate was not run at its corners). Past
+    EXACT_RANGES ranges, given them, a value at an end of its range is named by that end ("K_U
+    low"), so nine ranges fit a table's cell; the values themselves are in the JSON."""
     w, p = row.get("worst_corner"), row.get("weakest_parameter")
     if w is None:
         return "-"
-    corner = ", ".join(f"{k} {v:g}" for k, v in w["values"].items())
-    weak = "" if p is None else "; weakest: " + ", ".join(f"{k} {v:g}" for k, v in p["values"].items())
+    short = ranges is not None and len(ranges) > EXACT_RANGES
+
+    def value(k: str, v: float) -> str:
+        lo, hi = ranges[k] if short and k in ranges else (None, None)
+        return f"{k} {'low' if v == lo else 'high' if v == hi else f'{v:g}'}"
+
+    corner = ", ".join(value(k, v) for k, v in w["values"].items())
+    weak = "" if p is None else "; weakest: " + ", ".join(value(k, v) for k, v in p["values"].items())
     return f"{w['held']}/{w['runs']} at {corner}{weak}"
 
 
@@ -232,7 +240,7 @@ def table_markdown(rec: Recommendation, reference_V: float) -> str:
             lines.append(f"| - | {r['realisation']} | {r['estimator']} | | not simulated: {r['error']} | | | | | |"
                          + " |" * bool(rec.ranges))
             continue
-        corner = f" {corner_cell(r)} |" if rec.ranges else ""
+        corner = f" {corner_cell(r, rec.ranges)} |" if rec.ranges else ""
         lines.append(
             f"| {r['rank']} | {r['realisation']} | {r['estimator']} | {r['bench_loop']} | {_verdict_words(r)} | "
             f"{held_cell(r)} |{corner} {gm_cell(r)} | {fmt_figure(r['pm_deg'], '{:.1f}')} | "
@@ -279,7 +287,7 @@ def why_section(rec: Recommendation, reference_V: float) -> SheetSection:
                held_cell(r), gm_cell(r), fmt_figure(r["pm_deg"], "{:.1f}"),
                f"{r['worst_swing_V']:.2f} of {reference_V:g}", f"{r['amplifiers']}/{r['pots']}"]
         if rec.ranges:
-            row.insert(5, corner_cell(r))
+            row.insert(5, corner_cell(r, rec.ranges))
         rows.append(row)
     robust_words = robust_text(rec)
     note = (method_text(rec) + " " + verdict_text(rec) + (" " + robust_words if robust_words else "")

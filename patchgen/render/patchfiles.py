@@ -14,7 +14,8 @@ from patchgen.patch.as_patched import AsPatched, as_patched
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.static_check import StaticCheck, static_check, static_check_csv
 from patchgen.profiles.machine import MachineProfile
-from patchgen.render.diagram import diagram_pages, wiring_svg
+from patchgen.render.diagram import wiring_svg
+from patchgen.render.diagram_pages import diagram_pages
 from patchgen.render.margins_view import margin_cells, margins_json
 from patchgen.render.pottable import pots_csv
 from patchgen.render.sheet import SheetSection, SheetSummary, render_sheet

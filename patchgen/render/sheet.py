@@ -10,7 +10,6 @@ the same inputs give the same bytes.
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 
 import jinja2
@@ -22,19 +21,9 @@ from patchgen.patch.parts import fmt_value
 from patchgen.patch.reading import read
 from patchgen.patch.realization import STATE_UNITS
 from patchgen.profiles.machine import Procedure
+from patchgen.render.diagram_pages import PRINTED_MIN_PT, printed_scale, svg_size_mm
 from patchgen.render.diagram_symbols import SMALLEST_PT, dial_decimals, quantity_label, signed_label
 from patchgen.render.margins_view import patched_banner, patched_context
-
-SHEET_WIDTH_MM = 186.0  # the printed content's width: A4 and Letter's common 210 mm less 12 mm margins
-# The room the diagram gets on two printed pages, by the number of extra sections (bench
-# prediction, why this patch): a diagram taller than this at full width is shrunk to fit it ...
-DIAGRAM_ROOM_MM = {0: 96.0, 1: 96.0, 2: 68.0}
-DIAGRAM_ROOM_MM_MORE = 46.0
-# ... but never below the scale that prints its smallest text at this size: a diagram that needs
-# more room takes it (the sheet runs longer) rather than print labels nobody can read.
-PRINTED_MIN_PT = 6.0
-MM_PER_PT = 25.4 / 72.0
-PAGE_DIAGRAM_MM = 236.0  # one page's 250 mm of content less a heading and a caption: the tallest a diagram gets
 
 
 @dataclass(frozen=True)
@@ -87,7 +76,7 @@ def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[
     ctx = sheet_context(netlist, summary, procedure)
     figures = [("", svg)] if isinstance(svg, str) else svg
     html = _env(autoescape=True).get_template("patch-sheet.html.j2").render(
-        **ctx, figures=[(caption, *_inline_svg(body, ctx["diagram_mm"])) for caption, body in figures])
+        **ctx, figures=[(caption, *_inline_svg(body)) for caption, body in figures])
     md = _env(autoescape=False).get_template("patch-sheet.md.j2").render(**ctx)
     return _end(html), _end(md)
 
@@ -162,9 +151,6 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
     margins = [{"loop": loop, "figures": [(name, _fmt(v)) for name, v in figs.items()]}
                for loop, figs in summary.margins.items()]
 
-    # the diagram gets the room the extra sections leave on two printed pages (a third when it
-    # needs more to print its labels at PRINTED_MIN_PT: diagram_height_mm)
-    diagram_mm = DIAGRAM_ROOM_MM.get(len(summary.sections), DIAGRAM_ROOM_MM_MORE)
     judged = summary.judged
     banners = [patched_banner(judged)] if judged is not None else []
     return {
@@ -174,7 +160,6 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
                       + "; a nearly uncontrollable mode): further digits, and those of the pots set from it, "
                       "follow the computer's arithmetic, not the design.") if gain_notes else "",
         "parts": parts,
-        "diagram_mm": diagram_mm,
         "net": net,
         "summary": summary,
         "title": f"Patch sheet: {summary.design or net.design}",
@@ -285,47 +270,22 @@ def _fmt(v: float | str) -> str:
     return v if isinstance(v, str) else _minus(f"{v:.4g}")
 
 
-@dataclass(frozen=True)
-class Placement:
-    """How a diagram sits on the sheet: its height cap and the size its smallest label prints at."""
-
-    room_mm: float  # what the sheet planned for it
-    height_mm: float  # its cap: the room, or more for PRINTED_MIN_PT, at most a page
-    printed_pt: float
-
-    @property
-    def note(self) -> str:
-        """What the sheet says under a diagram too tall for one page at PRINTED_MIN_PT."""
-        if self.printed_pt >= PRINTED_MIN_PT - 1e-9:
-            return ""
-        return (f"Too tall for one page at {PRINTED_MIN_PT:g} pt: its smallest labels print at "
-                f"{self.printed_pt:.1f} pt; zoom in on screen, or print wiring.svg larger.")
-
-
-def placement(svg: str, room_mm: float) -> Placement:
-    """Where a diagram may grow on the sheet: from the room planned for it up to the height that
-    prints its smallest label at PRINTED_MIN_PT, but never past one page (PAGE_DIAGRAM_MM). Its
-    size is read from the SVG's own width and height (pt); SMALLEST_PT is its smallest label."""
-    size = {k: float(v) for k, v in re.findall(r'\b(width|height)="([0-9.eE+-]+)pt"', svg.split(">", 1)[0])}
-    if set(size) != {"width", "height"}:
-        raise ValueError("the wiring SVG must give its width and height in pt")
-    width_mm, height_mm = size["width"] * MM_PER_PT, size["height"] * MM_PER_PT
-    needed = math.ceil(height_mm * PRINTED_MIN_PT / SMALLEST_PT)
-    cap = min(max(room_mm, needed), PAGE_DIAGRAM_MM)
-    scale = min(1.0, SHEET_WIDTH_MM / width_mm, cap / height_mm)
-    return Placement(room_mm, cap, SMALLEST_PT * scale)
-
-
-def _inline_svg(svg: str, room_mm: float) -> tuple[str, str]:
-    """The SVG without an XML declaration, scaled to the sheet's width and to at most its
-    :func:`placement` height; and the note that goes under it (empty when it prints at 6 pt)."""
+def _inline_svg(svg: str) -> tuple[str, str]:
+    """The SVG without an XML declaration, at the scale it prints at (its own size, shrunk to the
+    page: patchgen.render.diagram_pages.printed_scale); and the note that goes under it when its
+    smallest label prints under PRINTED_MIN_PT (a diagram the split could not bring to one page)."""
     body = svg.strip()
     if body.startswith("<?xml"):
         body = body[body.index("?>") + 2:].lstrip()
-    where = placement(body, room_mm)
-    tag = (f'<svg class="wiring" role="img" aria-label="wiring diagram" data-room-mm="{room_mm:g}" '
-           f'style="max-height: {where.height_mm:g}mm" ')
-    return body.replace("<svg ", tag, 1), where.note
+    width, height = svg_size_mm(body)
+    scale = printed_scale(body)
+    printed = SMALLEST_PT * scale
+    note = "" if printed >= PRINTED_MIN_PT - 1e-9 else (
+        f"Too large for one page at {PRINTED_MIN_PT:g} pt: its smallest labels print at {printed:.1f} pt; zoom in on "
+        "screen, or print wiring.svg larger.")
+    tag = (f'<svg class="wiring" role="img" aria-label="wiring diagram" data-scale="{scale:.4f}" '
+           f'style="width: {width * scale:.1f}mm; height: {height * scale:.1f}mm" ')
+    return body.replace("<svg ", tag, 1), note
 
 
 def _env(autoescape: bool) -> jinja2.Environment:

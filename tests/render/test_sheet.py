@@ -1,4 +1,4 @@
-"""The patch sheet: tables from the netlist, same bytes, and at most two printed pages."""
+"""The patch sheet: tables from the netlist, same bytes, and its printed pages."""
 
 import re
 from pathlib import Path
@@ -83,15 +83,6 @@ def test_same_inputs_same_bytes():
     assert html == html2 and md == md2
 
 
-def allowed_pages(html: str, pages: int = 2) -> int:
-    """The pages a sheet may print on: ``pages``, and one more when a diagram was given more height
-    than the room planned for it (to print its smallest label at 6 pt); that diagram's height is
-    checked in test_sheet_pages."""
-    grown = any(float(h) > float(room) for room, h in
-                re.findall(r'data-room-mm="([0-9.]+)" style="max-height: ([0-9.]+)mm"', html))
-    return pages + (1 if grown else 0)
-
-
 def _pdf_pages(pdf: bytes) -> tuple[int, list[tuple[float, float]]]:
     """Page count and page sizes (pt) of a PDF, read from its page objects."""
     pages = len(re.findall(rb"/Type\s*/Page(?![a-zA-Z])", pdf))
@@ -102,12 +93,14 @@ def _pdf_pages(pdf: bytes) -> tuple[int, list[tuple[float, float]]]:
     return pages, boxes
 
 
-def test_html_prints_on_at_most_two_pages_that_fit_a4_and_letter(tmp_path, chromium):
+def test_html_prints_on_two_pages_that_fit_a4_and_letter(tmp_path, chromium):
+    """Without the static check and with a one-row extra section, the section 5.3 sheet takes two
+    pages (as written, with both, three: tests/render/test_sheet_pages.py)."""
     _, html, _ = _render()
     page = tmp_path / "patch-sheet.html"
     page.write_text(html, encoding="utf-8")
     pages, boxes = _pdf_pages(chromium.print_pdf(page))
-    assert 1 <= pages <= allowed_pages(html)
+    assert pages == 2
     assert boxes
     for w, h in boxes:   # within A4 (210 x 297 mm) and Letter (215.9 x 279.4 mm)
         assert w <= 210 * MM + 0.5 and h <= 279.4 * MM + 0.5

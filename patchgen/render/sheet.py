@@ -111,7 +111,7 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "role": a.role,
         "carries": _carries(a),
         "inputs": [_input_text(inp, source_name) for inp in a.inputs],
-        "settings": _amp_settings(a, net.time_scale_s),
+        "settings": _amp_settings(a, net.time_scale_s, procedure.ic_input),
         "purpose": a.purpose,
     } for a in net.amplifiers]
 
@@ -223,14 +223,16 @@ def _input_text(inp, source_name) -> str:
     return f"{inp.jack} ← {source_name(inp.source)}{via}"
 
 
-def _amp_settings(a: Amplifier, time_scale_s: float) -> str:
+def _amp_settings(a: Amplifier, time_scale_s: float, ic_input: str) -> str:
     """An amplifier's element values; an integrator's mode when it is selected by a cord or is not
-    the machine's time scale (a GP-6's one mode goes without saying: the header says it)."""
+    the machine's time scale (a GP-6's one mode goes without saying: the header says it); its IC
+    with what its IC input (``ic_input``) is patched to."""
     parts = []
     if a.mode is not None and (a.mode.jumper or a.mode.k0_per_s * time_scale_s != 1.0):
         parts.append(f"{_mode_words(a.mode.name, a.mode.jumper or '')}: k0 {a.mode.k0_per_s:g} 1/s")
     if a.ic_V is not None:
-        parts.append(f"IC {a.ic_V:g} V")
+        parts.append(f"IC 0 V ({ic_input} grounded)" if a.ic_V == 0 else
+                     f"IC {a.ic_V:g} V ({ic_input} at {-a.ic_V:g} V)")
     if a.T_d_s is not None:
         parts.append(f"T_d {a.T_d_s:g} s")
     if a.rolloff_s is not None:

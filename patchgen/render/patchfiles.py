@@ -8,8 +8,11 @@ prediction, why this patch, a pump-up schedule) come from the caller.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 
 from patchgen.design.lqg import Design
+from patchgen.inputs.resources import is_shipped_file, shipped
+from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.as_patched import AsPatched, as_patched
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.static_check import StaticCheck, static_check, static_check_csv
@@ -47,10 +50,19 @@ def sheet_summary(d: Design, sections: Sequence[SheetSection] = (), judged: AsPa
     kind = "none (all states measured)" if d.estimator is None else d.estimator.kind
     if d.estimator is not None and d.estimator.rolloff_s:
         kind += f", roll-off {d.estimator.rolloff_s:g} s"
-    return SheetSummary(design=d.spec.name, description=d.spec.description, states=list(d.states),
+    return SheetSummary(design=design_label(d.spec), description=d.spec.description, states=list(d.states),
                         K=[float(k) for k in d.K[0]], poles=list(d.closed_loop_poles), margins=margins,
                         estimator=kind, sections=list(sections), K_spread=[float(u) for u in d.spread.K[0]],
                         judged=judged)
+
+
+def design_label(spec: DesignSpec) -> str:
+    """The design as the sheet names it: its name, and the file it was read from when that name is
+    a shipped design's but the file is not the shipped one ("bench-recommended (from my-copy.toml)")."""
+    if spec.name in shipped("design") and Path(spec.path).is_file() and not is_shipped_file("design", spec.name,
+                                                                                              spec.path):
+        return f"{spec.name} (from {spec.path})"
+    return spec.name
 
 
 def static_section(check: StaticCheck, net: Netlist) -> SheetSection:

@@ -120,3 +120,26 @@ def test_checklist_and_pot_reading_come_from_the_procedure_given():
     # the sign table is on this sheet, so the checklist carries the sign step with the table, not without
     assert "check on the panel meter (u_c patched to the u socket)" in md
     assert "Check each sign with one feedback path at a time (all other coefficients at 0).\n" not in md
+
+
+def test_an_edited_copy_of_a_shipped_design_is_named_with_its_file(tmp_path):
+    """A copy that keeps a shipped design's name says which file it is; the shipped design, by name
+    or by its own path, and a copy under a name of its own, go by their names."""
+    from patchgen.inputs.spec import load_spec
+    from patchgen.render.patchfiles import design_label
+    from tests.cli_run import run_patchgen
+    from tests.conftest import design_path
+
+    text = design_path("bench-recommended").read_text()
+    (tmp_path / "my-copy.toml").write_text(text.replace("theta weighted", "theta weighted, edited"))
+    (tmp_path / "mine.toml").write_text(text.replace('name = "bench-recommended"', 'name = "mine"'))
+    assert design_label(load_spec("bench-recommended")) == "bench-recommended"
+    assert design_label(load_spec(str(design_path("bench-recommended")))) == "bench-recommended"
+    assert design_label(load_spec(str(tmp_path / "mine.toml"))) == "mine"
+    r = run_patchgen("patch", "./my-copy.toml", "--no-predict", "-o", "out", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    html, md = ((tmp_path / "out" / f).read_text() for f in ("patch-sheet.html", "patch-sheet.md"))
+    assert "<title>Patch sheet: bench-recommended (from ./my-copy.toml)</title>" in html
+    assert "# Patch sheet: bench-recommended (from ./my-copy.toml)" in md
+    assert "| Design | bench-recommended (from ./my-copy.toml) |" in md
+    assert '"design": "bench-recommended"' in (tmp_path / "out" / "netlist.json").read_text()  # the netlist as before

@@ -18,12 +18,13 @@ from patchgen.design.precision import gain_text, significant_digits
 from patchgen.patch.as_patched import AsPatched
 from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
 from patchgen.patch.parts import fmt_value
-from patchgen.patch.reading import read
 from patchgen.patch.realization import STATE_UNITS
+from patchgen.patch.sign_check import SignStep
 from patchgen.profiles.machine import Procedure
 from patchgen.render.diagram_pages import PRINTED_MIN_PT, printed_scale, svg_size_mm
 from patchgen.render.diagram_symbols import SMALLEST_PT, dial_decimals, quantity_label, signed_label
 from patchgen.render.margins_view import patched_banner, patched_context
+from patchgen.render.sign_sheet import sign_note, sign_rows
 
 
 @dataclass(frozen=True)
@@ -55,6 +56,8 @@ class SheetSummary:
     sections: list[SheetSection] = field(default_factory=list)
     K_spread: list[float] = field(default_factory=list)  # per gain, the design's (0: fully determined)
     judged: AsPatched | None = None  # the patch judged as patched: the sheet's 'Margins as patched'
+    signs: tuple[SignStep, ...] = ()  # the sign check (patchgen.patch.sign_check), a step per pot
+    static: SheetSection | None = None  # the static check, after the sign check
 
 
 def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[str, str]],
@@ -122,20 +125,6 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
             "carries": _carries(a)}
            for a in net.amplifiers if a.role in ("integrator", "lag")]
 
-    reading = read(net)
-    sign_checks = []
-    for p in net.pots:
-        sign = reading.path_sign(p.amplifier)
-        if sign is None:
-            continue
-        if p.source in sensors:
-            moved, pol = quantity_label(sensors[p.source].quantity), 1
-        else:
-            carried = amps[p.source].carries
-            moved, pol = quantity_label(carried.quantity), carried.polarity
-        sign_checks.append({"pot": p.id, "moved": moved, "through": p.source,
-                            "u_c": "+" if sign * pol > 0 else "−"})
-
     spread = summary.K_spread or [0.0] * len(summary.K)
     states, gain_notes = [], []
     for s, k, u in zip(summary.states, summary.K, spread):
@@ -170,10 +159,13 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "amplifiers": amplifiers,
         "wires": wires,
         "ics": ics,
-        "sign_checks": sign_checks,
+        "sign_checks": sign_rows(summary.signs, net, procedure.ic_input),
+        "sign_note": sign_note(procedure.ic_input),
+        "static": summary.static,
+        "static_tables": _column_groups(summary.static) if summary.static is not None else [],
         "checklist": procedure.steps("checklist", machine=net.machine_name, units=net.units,
                                      resolution=net.pot_resolution, reference_V=net.reference_V,
-                                     integrators=tuple(i["id"] for i in ics), signs=bool(sign_checks)),
+                                     integrators=tuple(i["id"] for i in ics), signs=bool(summary.signs)),
         "notes": list(net.notes),
         "sections": summary.sections,
         "resolution": f"{net.pot_resolution:g}",
@@ -181,6 +173,19 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "output_amp": net.output.source,
         "time_scale": time_scale_text(net),
     }
+
+
+STATIC_COLUMNS = 7  # conditions side by side in one static-check table: each reading fits its cell on one line
+
+
+def _column_groups(section: SheetSection) -> list[tuple[list[str], list[list[str]]]]:
+    """A table of many columns as several of at most STATIC_COLUMNS beside its first column."""
+    n = len(section.header) - 1
+    k = -(-n // STATIC_COLUMNS)
+    size = -(-n // k)
+    return [([section.header[0], *section.header[1 + i:1 + i + size]], [[r[0], *r[1 + i:1 + i + size]]
+                                                                         for r in section.rows])
+            for i in range(0, n, size)]
 
 
 def time_scale_text(net: Netlist) -> str:

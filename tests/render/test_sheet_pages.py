@@ -88,6 +88,14 @@ def test_every_diagram_prints_its_smallest_label_at_6_pt_or_more(printed, case):
         assert html.count('<figure class="own-page">') == len(diagrams)
 
 
+def test_a_three_page_layout_keeps_the_static_check_with_the_sign_check(printed):
+    """The static check follows the sign check at once; neither has a page to itself."""
+    html = printed[("bench-recommended", "gp6")][0]["patch-sheet.html"]
+    order = [html.index(h) for h in ("<h2>Wiring diagram", "<h2>Procedure", "<h2>Sign check", "<h2>Static check",
+                                     "<h2>Margins as patched", "<h2>Predicted on the bench")]
+    assert order == sorted(order)
+
+
 def test_a_swingup_sheet_prints_as_the_patch_sheet_does(chromium, tmp_path):
     out = tmp_path / "out"
     r = run_patchgen("swingup", "bench-recommended", "-o", str(out))

@@ -2,6 +2,8 @@
 the bench prediction): as many pages as the README says, each within A4 and Letter, and every
 wiring diagram laid out (as Chromium prints it) with its smallest label at 6 pt or more."""
 
+import re
+
 import pytest
 
 from tests.cli_run import run_patchgen
@@ -94,6 +96,15 @@ def test_a_three_page_layout_keeps_the_static_check_with_the_sign_check(printed)
     order = [html.index(h) for h in ("<h2>Wiring diagram", "<h2>Procedure", "<h2>Sign check", "<h2>Static check",
                                      "<h2>Margins as patched", "<h2>Predicted on the bench")]
     assert order == sorted(order)
+
+
+def test_the_sheets_text_is_7_pt_or_more():
+    """Tables, notes and captions at 7 pt or more (they were 6.2 to 6.6 pt)."""
+    from patchgen.inputs.resources import folder
+
+    css = folder("template").joinpath("patch-sheet.html.j2").read_text().split("</style>")[0]
+    sizes = [float(x) for x in re.findall(r"font(?:-size)?:\s*([0-9.]+)pt", css)]
+    assert sizes and min(sizes) >= 7.0
 
 
 def test_a_swingup_sheet_prints_as_the_patch_sheet_does(chromium, tmp_path):

@@ -11,15 +11,18 @@ pot at 0), moves one input and says which way the reading must go. What is moved
   integrator's output is minus its IC jack), for a pot fed from a state no hand can move.
 
 The reading is u_c when the pot's amplifier reaches the output through summers alone (their pots
-set too), else that amplifier itself; an integrator's is read in OP, as the direction it ramps,
-and at once back to IC. A path through a differentiator shows while the hand moves. Each step is
-chosen so that the pot with its sign flipped would move the reading the other way.
+set too) and the pot's path shows there, else that amplifier itself; an integrator's is read in
+OP, as the direction it ramps, and at once back to IC. A path through a differentiator shows while
+the hand moves. Each step is chosen so that the pot with its sign flipped would move the reading
+the other way.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+
+import numpy as np
 
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.static_check import FULL_SCALE, Condition, Wire, solve, spare_pots, test_voltage_source, wires_of
@@ -87,7 +90,7 @@ def sign_check(net: Netlist, machine: MachineProfile) -> tuple[SignStep, ...]:
     Returns
     -------
     tuple of SignStep
-        In the order of the pots.
+        In the order of the pots; a pot whose sign no reading would show (one set to 0) has none.
     """
     wires = wires_of(net)
     roles = {a.id: a.role for a in net.amplifiers}
@@ -95,17 +98,15 @@ def sign_check(net: Netlist, machine: MachineProfile) -> tuple[SignStep, ...]:
     spares = spare_pots(net, machine)
     steps = []
     for p in net.pots:
-        read, down, ramp = _downstream(net, wires, roles, p.amplifier)
+        reads = [_downstream(net, wires, roles, p.amplifier)]
+        if reads[0][0] != p.amplifier:  # else at the pot's own amplifier, when u_c hides its path
+            reads.append((p.amplifier, (), False))
         candidates = sorted(_upstream(wires, roles, hand, p.source), key=lambda r: r.rank)
-        chosen = None
-        for route in candidates:
-            step = _step(net, wires, roles, machine, p.id, route, read, down, ramp, spares[0] if spares else None)
-            if step is not None:
-                chosen = step
-                break
-        if chosen is None:
-            raise ValueError(f"{net.design}: no sign check moves the signal through {p.id}")
-        steps.append(chosen)
+        chosen = (_step(net, wires, roles, machine, p.id, route, read, down, ramp, spares[0] if spares else None)
+                  for route in candidates for read, down, ramp in reads)
+        step = next((s for s in chosen if s is not None), None)
+        if step is not None:  # none for a pot at 0, whose sign nothing shows
+            steps.append(step)
     return tuple(steps)
 
 
@@ -157,9 +158,12 @@ def _step(net: Netlist, wires: list[Wire], roles: dict[str, str], machine: Machi
     diffs = tuple(dict.fromkeys(route.differentiators + ((read,) if roles[read] == "differentiator" else ())))
     set_wires = [w if w.pot is None or w.pot in on else replace(w, gain=0.0) for w in wires]
     unit = _condition(route, 1.0, diffs)
-    value, peak = _reading(net, set_wires, unit, read, ramp)
     flipped = [replace(w, gain=-w.gain) if w.pot == pot else w for w in set_wires]
-    other, _ = _reading(net, flipped, unit, read, ramp)
+    try:
+        value, peak = _reading(net, set_wires, unit, read, ramp)
+        other, _ = _reading(net, flipped, unit, read, ramp)
+    except np.linalg.LinAlgError:  # a loop of gain exactly 1 on the path: no steady reading
+        return None
     if abs(value) < 1e-9 or math.copysign(1.0, value) == math.copysign(1.0, other) or abs(other) < 1e-9:
         return None
     drive = Drive("hand", route.origin)

@@ -17,7 +17,7 @@ from patchgen.patch.static_check import spare_pots
 from patchgen.render.sign_sheet import sign_rows
 from tests.shipped import patch_of, shipped_cases
 
-pytestmark = pytest.mark.heavy(10)  # seconds, roughly: see tests/conftest.py
+pytestmark = pytest.mark.heavy(6)  # seconds, roughly: see tests/conftest.py
 
 
 @pytest.fixture(scope="module")
@@ -110,3 +110,26 @@ def test_the_sheet_asks_only_for_moves(checked):
             assert "positive" not in row["move"].lower()
             assert row["way"] in ("+", "−", "+ while it moves", "− while it moves", "rises", "falls",
                                   "falls back to 0", "rises back to 0"), (key, row)
+
+
+def test_a_path_hidden_at_u_c_is_read_at_its_own_amplifier(tmp_path):
+    """bench-recommended's reduced observer on two units: theta through U1.P2 reaches u_c only
+    beside theta's own x10 cord into a lag, which swamps it there; its row reads U1.A6 instead."""
+    from patchgen.design.lqg import design_on
+    from patchgen.inputs.spec import load_spec
+    from patchgen.patch.build import build_patch
+    from patchgen.profiles.bench import load_bench
+    from patchgen.profiles.machine import load_machine
+    from tests.conftest import design_path
+
+    text = re.sub(r'^kind = .*$', 'kind = "reduced_observer"', design_path("bench-recommended").read_text(),
+                  flags=re.M)
+    (tmp_path / "two.toml").write_text(text + '\n[patch]\nunits = "auto"\n')
+    spec = load_spec(str(tmp_path / "two.toml"))
+    machine = load_machine(spec.machine)
+    net = build_patch(design_on(spec, machine, load_bench(spec.bench)), machine)
+    steps = {s.pot: s for s in sign_check(net, machine)}
+    assert net.units == 2 and set(steps) == {p.id for p in net.pots}
+    p2 = steps["U1.P2"]
+    assert (p2.drive.kind, p2.drive.target, p2.read) == ("hand", "theta", "U1.A6")
+    assert np.sign(_expected(net, p2)) == p2.expect == -np.sign(_expected(net, p2, flip="U1.P2"))

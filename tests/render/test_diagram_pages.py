@@ -19,7 +19,7 @@ from tests.shipped import patch_of, shipped_cases
 from .svg_geometry import parse
 from .test_diagram import _two_unit_netlist
 
-pytestmark = pytest.mark.heavy(15)  # seconds, roughly: see tests/conftest.py
+pytestmark = pytest.mark.heavy(6)  # seconds, roughly: see tests/conftest.py
 
 
 @pytest.fixture(scope="module")

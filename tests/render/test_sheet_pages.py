@@ -12,7 +12,7 @@ from tests.shipped import patch_files_of
 
 from .test_sheet import MM, _pdf_pages
 
-pytestmark = pytest.mark.heavy(40)  # seconds, roughly: see tests/conftest.py
+pytestmark = pytest.mark.heavy(20)  # seconds, roughly: see tests/conftest.py
 
 MACHINE_COLUMNS = {"Comdyna GP-6": "gp6", "THE ANALOG THING": "the-analog-thing"}
 

@@ -59,6 +59,19 @@ def shipped_file(kind: str, name: str) -> Traversable:
     return f
 
 
+def is_shipped_file(kind: str, name: str, name_or_path: str | Path) -> bool:
+    """Whether what a user gave (a stem, or a path that exists) is the shipped file ``name`` of that
+    kind itself."""
+    found = resolve(kind, name_or_path)
+    shipped_one = folder(kind).joinpath(f"{name}.toml")
+    if not isinstance(found, Path):
+        return found == shipped_one
+    try:
+        return isinstance(shipped_one, Path) and found.resolve() == shipped_one.resolve()
+    except OSError:
+        return False
+
+
 def resolve(kind: str, name_or_path: str | Path, source: str = "", field: str = "") -> Path | Traversable:
     """A user's file by path, or a shipped one by stem (when no file of that name exists).
 

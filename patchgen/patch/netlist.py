@@ -24,7 +24,7 @@ from __future__ import annotations
 import json
 import re
 from pathlib import Path
-from typing import Literal
+from typing import Literal, NamedTuple
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -185,34 +185,58 @@ def json_schema() -> dict:
     return Netlist.model_json_schema(by_alias=True)
 
 
-def wire_list(net: Netlist) -> list[tuple[str, str]]:
-    """Every patch cord as (from, to), in a stable order: pots fed first, then amplifier inputs (a
+class Cord(NamedTuple):
+    """One patch cord: its two ends as the wire list writes them, and the elements it joins.
+
+    ``source`` is the sensor, amplifier, pot or part whose output (a pot's wiper) the cord
+    carries; ``target`` the pot (its top), amplifier or part it feeds ("" for the servo
+    amplifier); ``jack`` the amplifier input it serves ("" for a pot's top, a mode jumper or a
+    part across a feedback)."""
+
+    frm: str
+    to: str
+    source: str
+    target: str
+    jack: str = ""
+
+
+def cords(net: Netlist) -> list[Cord]:
+    """Every patch cord, in a stable order: pots fed first, then amplifier inputs (a
     differentiator's through its external capacitor and series resistor), an integrator's mode
     jumper, then parts across a feedback; on slaved units, grouped by the unit each cord ends on."""
-    wires: list[tuple[str, str]] = []
+    out: list[Cord] = []
     for p in net.pots:
-        wires.append((_jack_name(net, p.source), f"{p.id} top"))
+        out.append(Cord(_jack_name(net, p.source), f"{p.id} top", p.source, p.id))
     for a in net.amplifiers:
         for inp in a.inputs:
             src = f"{inp.pot} wiper" if inp.pot else _jack_name(net, inp.source)
+            origin = inp.pot or inp.source
             cap = next((x for x in net.parts if x.amplifier == a.id and x.jack == inp.jack and x.kind == "capacitor"),
                        None)
             res = next((x for x in net.parts if x.amplifier == a.id and x.jack == inp.jack and x.kind == "resistor"),
                        None)
             if cap is not None and res is not None:  # a differentiator's input: capacitor, then series resistor
-                wires += [(src, f"{cap.id} ({cap.fit})"), (cap.id, f"{res.id} ({res.fit})"),
-                          (res.id, f"{a.id} summing junction")]
+                out += [Cord(src, f"{cap.id} ({cap.fit})", origin, a.id, inp.jack),
+                        Cord(cap.id, f"{res.id} ({res.fit})", cap.id, res.id),
+                        Cord(res.id, f"{a.id} summing junction", res.id, a.id)]
                 continue
-            wires.append((src, f"{a.id} in {inp.jack} (x{inp.weight})"))
+            out.append(Cord(src, f"{a.id} in {inp.jack} (x{inp.weight})", origin, a.id, inp.jack))
         if a.mode is not None and a.mode.jumper:
-            wires.append((f"{a.id} {a.mode.jumper}", f"{a.id} out ({a.mode.name}: k0 {a.mode.k0_per_s:g} 1/s)"))
+            out.append(Cord(f"{a.id} {a.mode.jumper}", f"{a.id} out ({a.mode.name}: k0 {a.mode.k0_per_s:g} 1/s)",
+                            a.id, a.id))
         for x in net.parts:
             if x.amplifier == a.id and x.jack is None:
-                wires.append((f"{x.id} ({x.fit})", f"across {a.id} feedback: summing junction to output"))
-    wires.append((_jack_name(net, net.output.source), "servo amplifier input (u_c)"))
+                out.append(Cord(f"{x.id} ({x.fit})", f"across {a.id} feedback: summing junction to output", x.id,
+                                a.id))
+    out.append(Cord(_jack_name(net, net.output.source), "servo amplifier input (u_c)", net.output.source, ""))
     if net.units > 1:  # slaved units: each unit's cords together, in the order above
-        wires.sort(key=lambda w: _unit(w[1]))
-    return wires
+        out.sort(key=lambda c: _unit(c.to))
+    return out
+
+
+def wire_list(net: Netlist) -> list[tuple[str, str]]:
+    """Every patch cord as (from, to), in the order of :func:`cords`."""
+    return [(c.frm, c.to) for c in cords(net)]
 
 
 def _unit(end: str) -> int:

@@ -7,9 +7,10 @@ the likeliest fault).
 
 The conditions:
 
-- **IC**: every integrator in IC at its own test value (its IC jack at minus that value), the
-  sensors' cords unplugged and their inputs grounded: each reading checks the pots and signs of
-  the paths from the integrators.
+- **IC**: every integrator in IC at its own test value (its IC jack at minus that value, from a
+  spare pot of its own; with fewer spare pots than integrators, as many integrators at a time as
+  pots are spare, the others' IC jacks grounded), the sensors' cords unplugged and their inputs
+  grounded: each reading checks the pots and signs of the paths from the integrators.
 - **one sensor at a time**: that sensor's input at a test voltage, taken from the reference
   through a spare pot (or a stated source when none is spare), the others grounded, the
   integrators in IC at 0: the pots, weights and signs of that sensor's paths.
@@ -36,7 +37,7 @@ from __future__ import annotations
 import csv
 import io
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -160,15 +161,21 @@ def static_check(net: Netlist, machine: MachineProfile) -> StaticCheck:
     wires = wires_of(net)
     ints = [a.id for a in net.amplifiers if a.role == "integrator"]
     sensors = [s.id for s in net.sensors if any(w.source == s.id for w in wires)]
-    spare = _spare_pot(net, machine)
+    spares = spare_pots(net, machine)
+    spare = spares[0] if spares else None
     dynamic = [a.id for a in net.amplifiers if a.role in ("integrator", "differentiator")]
     switchable = tuple(a for a in dynamic if "summer" in _slot_roles(machine, net, a))
     conds: list[Condition] = []
-    if ints:
-        conds.append(_scaled(net, wires, machine, Condition(
-            "IC", {}, {a: IC_TEST_V[k % len(IC_TEST_V)] for k, a in enumerate(ints)}, (),
-            "IC mode; sensor cords unplugged, inputs grounded; each integrator's initial condition at minus the "
-            "value listed"), spare))
+    test_ic = {a: IC_TEST_V[k % len(IC_TEST_V)] for k, a in enumerate(ints)}
+    ic_input = machine.procedure.ic_input
+    groups = [ints[k:k + len(spares)] for k in range(0, len(ints), len(spares))] if spares else [ints]
+    for group in groups if ints else []:
+        # each integrator's IC jack from a spare pot of its own: as many at a time as pots are spare
+        name = "IC" if len(groups) == 1 else "IC " + " ".join(group)
+        rest = f"; the other integrators' {ic_input}s grounded" if len(groups) > 1 else ""
+        conds.append(_ic_sourced(_scaled(net, wires, machine, Condition(
+            name, {}, {a: test_ic[a] for a in group}, (),
+            f"IC mode; sensor cords unplugged, inputs grounded{rest}"), spare), spares, machine.reference_V, ic_input))
     for s in sensors:
         conds.append(_scaled(net, wires, machine, Condition(
             f"{s} only", {s: 1.0}, {}, (), f"IC mode, integrators at 0; other sensor inputs grounded; {s} input at"),
@@ -204,20 +211,48 @@ def _slot_roles(machine: MachineProfile, net: Netlist, amp_id: str) -> tuple[str
     return tuple(next((a.roles for a in slots if a.id == amp_id), ()))
 
 
-def _spare_pot(net: Netlist, machine: MachineProfile) -> str | None:
-    """A pot the patch leaves free (P1 ... on one unit, U1.P1 ... on slaved units), or None."""
+def spare_pots(net: Netlist, machine: MachineProfile) -> list[str]:
+    """The pots the patch leaves free (P1 ... on one unit, U1.P1 ... on slaved units), in order."""
     used = {p.id for p in net.pots}
     if net.units == 1:
         names = [f"P{k}" for k in range(1, machine.pot_count + 1)]
     else:
         names = [f"U{u}.P{k}" for u in range(1, net.units + 1) for k in range(1, machine.pot_count + 1)]
-    return next((p for p in names if p not in used), None)
+    return [p for p in names if p not in used]
+
+
+def test_voltage_source(volts: float, pot: str | None, reference_V: float) -> str:
+    """Where a test voltage comes from: a spare pot's setting from the reference of its sign
+    ("spare pot P8 at 0.220 from -10 V"), or a bench supply when no pot is spare."""
+    if pot is None:
+        return "a bench supply (no pot is spare)"
+    sign = "+" if volts >= 0 else "−"
+    return f"spare pot {pot} at {abs(volts) / reference_V:.3f} from {sign}{reference_V:g} V"
+
+
+def _volts(v: float) -> str:
+    """A signed voltage as the sheet writes it: +2.2 V, −2.2 V."""
+    return f"{'+' if v >= 0 else '−'}{abs(v):g} V"
+
+
+def _ic_sourced(cond: Condition, spares: list[str], reference_V: float, ic_input: str) -> Condition:
+    """An IC condition with where each integrator's IC-input voltage comes from (minus its value:
+    in IC an integrator's output is minus its IC input), a spare pot each, in the setup; the
+    input named as the machine names it (``ic_input``: the GP-6's IC jack)."""
+    said = []
+    for k, (a, v) in enumerate(cond.ic_V.items()):
+        jack = -v if v else 0.0
+        pot = spares[k] if spares else None
+        said.append(f"{a}'s {ic_input} grounded" if jack == 0 else
+                    f"{a}'s {ic_input} at {_volts(jack)} ({test_voltage_source(jack, pot, reference_V)})")
+    source = "; ".join(said)
+    return replace(cond, setup=f"{cond.setup}; {source}", source=source)
 
 
 def _scaled(net: Netlist, wires: list[Wire], machine: MachineProfile, cond: Condition, spare: str | None) -> Condition:
-    """The condition with its sensor voltages scaled so that the largest reading is FULL_SCALE of
-    the reference (at most the reference itself), each a dial setting of the spare pot, and the
-    source of the test voltage named."""
+    """The condition with its sensor voltages (or its integrators' ICs) scaled so that the largest
+    reading is FULL_SCALE of the reference (at most the reference itself), each a dial setting of
+    a spare pot, and the source of the test voltage named."""
     ref = machine.reference_V
     if cond.sensors_V:
         peak = max(abs(v) for v in solve(net, wires, cond).values())
@@ -225,13 +260,14 @@ def _scaled(net: Netlist, wires: list[Wire], machine: MachineProfile, cond: Cond
         setting = max(machine.pot_resolution, math.floor(level / machine.pot_resolution) * machine.pot_resolution)
         volts = setting * ref
         sensors = {s: round(v * volts, 9) for s, v in cond.sensors_V.items()}
-        source = (f"spare pot {spare} at {setting:.3f} from +{ref:g} V" if spare else
-                  "a bench supply (no pot is spare)")
+        source = test_voltage_source(volts, spare, ref)
         return Condition(cond.name, sensors, cond.ic_V, cond.as_summers, f"{cond.setup} {volts:g} V ({source})",
                          source)
     peak = max(abs(v) for v in solve(net, wires, cond).values())
     k = FULL_SCALE * ref / peak if peak > 0 else 1.0
-    ic = {a: math.floor(abs(v * k) * 10) / 10 * math.copysign(1.0, v) for a, v in cond.ic_V.items()}
+    step = machine.pot_resolution * ref  # a spare pot's step from the reference: each IC a setting of it
+    ic = {a: round(math.floor(abs(v * k) / step + 1e-9) * step, 9) * math.copysign(1.0, v)
+          for a, v in cond.ic_V.items()}
     return Condition(cond.name, {}, ic, (), cond.setup)
 
 

@@ -108,12 +108,15 @@ class Step(InputModel):
 
 class Procedure(InputModel):
     """How a patch is run on this machine, as its manual words it: the operating steps a netlist
-    carries, the bench checklist a sheet prints, how a pot is set (the pot table's title) and what
-    its setting is read on (the sheet's pot table)."""
+    carries, the bench checklist a sheet prints, how a pot is set (the pot table's title), what
+    its setting is read on (the sheet's pot table) and what an integrator's IC input is called (the
+    checks' test voltages)."""
 
     pot_setting: str = Field(min_length=1, max_length=200)
     pot_reading: str = Field(min_length=1, max_length=100,
                              description="what a pot's setting is read on, e.g. 'dial' or 'panel meter'")
+    ic_input: str = Field(default="IC jack", min_length=1, max_length=40,
+                          description="what an integrator's initial-condition input is called, e.g. 'IC jack'")
     operation: list[Step] = Field(min_length=1, max_length=50)
     checklist: list[Step] = Field(min_length=1, max_length=50)
 

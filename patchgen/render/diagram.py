@@ -9,8 +9,8 @@ its own output (a lag built from an integrator and a pot) has that loop drawn ov
 output back through the pot to its input. A coefficient pot is a circle with its id, its setting
 written on the wire it feeds; an external part is labelled with its id above and its value below.
 Sensors are named on the left, the control voltage u_c on the right; on a diagram of one unit of
-slaved units, a flag stands for a cord to or from another unit, named for the jack at its other
-end.
+slaved units (or one part of a diagram split to fit a page: patchgen.render.diagram_pages), a flag
+stands for a cord to or from an element drawn elsewhere, named for the jack at its other end.
 
 Layout is by stages, left to right (patchgen.render.diagram_layout), and every label has room of
 its own (patchgen.render.diagram_geometry). Everything is computed from the netlist alone, in a
@@ -31,7 +31,7 @@ from patchgen.render.diagram_geometry import (
     measure,
     name_pt,
 )
-from patchgen.render.diagram_graph import Block, Graph, unit_graph, unit_of, units, whole_graph
+from patchgen.render.diagram_graph import Block, Graph, whole_graph
 from patchgen.render.diagram_layout import Layout, place
 from patchgen.render.diagram_symbols import (
     ASCENT,
@@ -77,45 +77,6 @@ def wiring_svg(netlist: Netlist) -> str:
         same netlist gives the same bytes.
     """
     return graph_svg(whole_graph(netlist))
-
-
-def diagram_pages(net: Netlist) -> list[tuple[str, str]]:
-    """The wiring diagrams a patch sheet prints: one for a patch on one machine, one per unit for
-    a patch on slaved units.
-
-    Parameters
-    ----------
-    net : Netlist
-        The patch.
-
-    Returns
-    -------
-    list of (str, str)
-        (caption, SVG text) for each diagram, units in order. A unit's diagram holds that unit's
-        amplifiers and pots, named as on its own panel (A1 for U1.A1; the caption says which
-        unit); each signal that crosses to or from another unit ends in a flag
-        named for the jack at its other end ("from U2.A6", "to U2.P3", "to U1.A7 x1a"). Each
-        diagram is meant to be printed at most 186 mm wide, where its smallest text is 6 pt or
-        more.
-    """
-    found = units(net)
-    if found == [""]:
-        return [(f"{net.design} on {net.machine_name}", wiring_svg(net))]
-    pages = []
-    for unit in found:
-        graph = unit_graph(net, unit)
-        n_amps = len(graph.blocks)
-        n_pots = sum(1 for p in net.pots if unit_of(p.id) == unit)
-        others = ", ".join(u for u in found if u != unit)
-        caption = (f"Unit {unit} of {len(found)}: {_count(n_amps, 'amplifier')} and {_count(n_pots, 'pot')}, "
-                   f"named as on its panel ({unit}.A1 is A1)" + (f"; a flag is a cord to or from {others}"
-                                                                  if others else ""))
-        pages.append((caption, graph_svg(graph)))
-    return pages
-
-
-def _count(n: int, noun: str) -> str:
-    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 def graph_svg(graph: Graph) -> str:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from patchgen.patch.netlist import Amplifier, Netlist, Part
+from patchgen.patch.netlist import Amplifier, Netlist, Part, cords
 from patchgen.patch.reading import read, stage_levels
 from patchgen.render.diagram_symbols import dial_decimals, part_value, quantity_label, signed_label
 
@@ -98,60 +98,97 @@ def whole_graph(net: Netlist) -> Graph:
 
 def unit_graph(net: Netlist, unit: str) -> Graph:
     """One unit of a patch on slaved units: its amplifiers and pots, connectors for the rest."""
-    amps = {a.id: a for a in net.amplifiers}
+    return page_graph(net, unit, [a.id for a in net.amplifiers if unit_of(a.id) == unit], loose_pots(net, unit))
+
+
+def loose_pots(net: Netlist, unit: str) -> list[str]:
+    """A unit's pots that feed another unit's amplifiers (drawn on their own, with a flag)."""
+    return [p.id for p in net.pots if unit_of(p.id) == unit and unit_of(p.amplifier) != unit]
+
+
+def page_graph(net: Netlist, unit: str, shown: list[str], loose: list[str]) -> Graph:
+    """Part of one unit on a page of its own: the amplifiers ``shown`` with the unit's pots that feed
+    them, and the ``loose`` pots (of this unit, feeding amplifiers drawn elsewhere), each ending in
+    a flag; a flag for every cord to or from an element drawn elsewhere, named for the jack at its
+    other end in full ("from U1.A3", "to U2.P1", "to U1.A7 x10a") with its number in the wire list.
+
+    Parameters
+    ----------
+    net : Netlist
+        The patch.
+    unit : str
+        The unit ("" on one machine); its elements are named as on its panel (A1 for U1.A1).
+    shown : list of str
+        The amplifiers drawn, all on ``unit``.
+    loose : list of str
+        Pots of ``unit`` drawn without their amplifier.
+    """
     pots = {p.id: p for p in net.pots}
     sensors = {s.id for s in net.sensors}
+    here_amps = set(shown)
+    here_pots = {p.id for p in net.pots if unit_of(p.id) == unit and p.amplifier in here_amps} | set(loose)
+    numbered = list(enumerate(cords(net), 1))
     incoming: dict[str, Source] = {}
 
-    def local(src: str) -> str:
-        """The id a source has in this unit's diagram (a connector for another unit's amplifier)."""
-        if src in sensors or unit_of(src) == unit:
-            return src
-        return _incoming(incoming, src, f"from {src}", _signal(net, src))
+    def numbers(match) -> tuple[str, ...]:
+        found = [n for n, c in numbered if match(c)]
+        return (("cord " if len(found) == 1 else "cords ") + ", ".join(map(str, found)),) if found else ()
 
-    def shown(element_id: str) -> str:
+    def local(src: str) -> str:
+        """The id a source has on this page (a connector for an amplifier drawn elsewhere)."""
+        if src in sensors or src in here_amps:
+            return src
+        return _incoming(incoming, src, f"from {src}", (_signal(net, src), *numbers(
+            lambda c: c.source == src and (c.target in here_amps or c.target in here_pots))))
+
+    def shown_name(element_id: str) -> str:
         """This unit's amplifiers and pots as on its panel (A1 for U1.A1)."""
-        return element_id.split(".", 1)[1] if unit_of(element_id) == unit else element_id
+        return element_id.split(".", 1)[1] if unit_of(element_id) == unit and unit else element_id
 
     blocks: list[Block] = []
     for a in net.amplifiers:
-        if unit_of(a.id) != unit:
+        if a.id not in here_amps:
             continue
-        block = _amplifier(net, a, local)
+        block = _amplifier(net, a, local, lambda inp: inp.pot in here_pots if inp.pot else True)
         feeds = []
         for inp, feed in zip(a.inputs, block.feeds):
-            if inp.pot and unit_of(inp.pot) != unit:
+            if inp.pot and inp.pot not in here_pots:
                 p = pots[inp.pot]
                 src = _incoming(incoming, inp.pot, f"from {inp.pot}",
-                                f"{_signal(net, p.source)} × {feed.setting}")
+                                (f"{_signal(net, p.source)} × {feed.setting}",
+                                 *numbers(lambda c, pot=inp.pot, a=a.id: c.source == pot and c.target == a)))
                 feed = Feed(src, feed.weight, parts=feed.parts)
             elif inp.pot:
-                feed = replace(feed, pot=shown(inp.pot))
+                feed = replace(feed, pot=shown_name(inp.pot))
             feeds.append(feed)
-        blocks.append(replace(block, feeds=tuple(feeds), name=shown(a.id)))
+        blocks.append(replace(block, feeds=tuple(feeds), name=shown_name(a.id)))
 
     outputs: list[Block] = []
-    for p in net.pots:      # a pot of this unit feeding another unit's amplifier
-        if unit_of(p.id) == unit and unit_of(p.amplifier) != unit:
-            feed = Feed(local(p.source), pot=shown(p.id), setting=_setting(net, p.id))
-            outputs.append(_connector(f"to {p.amplifier} {p.jack}",
-                                      f"{_signal(net, p.source)} × {feed.setting}", feed))
-    for a in net.amplifiers:  # this unit's amplifiers feeding another unit
-        if unit_of(a.id) != unit:
+    for pid in loose:       # a pot of this unit feeding an amplifier drawn elsewhere
+        p = pots[pid]
+        feed = Feed(local(p.source), pot=shown_name(p.id), setting=_setting(net, p.id))
+        outputs.append(_connector(f"to {p.amplifier} {p.jack}", (
+            f"{_signal(net, p.source)} × {feed.setting}",
+            *numbers(lambda c, p=p: c.source == p.id and c.target == p.amplifier and c.jack == p.jack)), feed))
+    for a in net.amplifiers:  # this page's amplifiers feeding elements drawn elsewhere
+        if a.id not in here_amps:
             continue
         for p in net.pots:
-            if p.source == a.id and unit_of(p.id) != unit:
-                outputs.append(_connector(f"to {p.id}", _signal(net, a.id), Feed(a.id)))
+            if p.source == a.id and p.id not in here_pots:
+                outputs.append(_connector(f"to {p.id}", (_signal(net, a.id), *numbers(
+                    lambda c, p=p, a=a.id: c.source == a and c.target == p.id)), Feed(a.id)))
         for b in net.amplifiers:
             for inp in b.inputs:
-                if inp.source == a.id and inp.pot is None and unit_of(b.id) != unit:
-                    outputs.append(_connector(f"to {b.id} {inp.jack}", _signal(net, a.id), Feed(a.id)))
-    if net.output.source in amps and unit_of(net.output.source) == unit:
+                if inp.source == a.id and inp.pot is None and b.id not in here_amps:
+                    outputs.append(_connector(f"to {b.id} {inp.jack}", (_signal(net, a.id), *numbers(
+                        lambda c, b=b.id, j=inp.jack, a=a.id: c.source == a and c.target == b and c.jack == j)),
+                        Feed(a.id)))
+    if net.output.source in here_amps:
         outputs.append(_control_output(net))
 
     used = [f.source for b in blocks + outputs for f in b.feeds]
     sources = [_sensor(net, s.id) for s in net.sensors if s.id in used]
-    sources += [incoming[k] for k in incoming]
+    sources += [incoming[k] for k in incoming if k in used]
     level = stage_levels([s.id for s in sources], [(b.id, b.role, [f.source for f in b.feeds]) for b in blocks])
     return Graph(tuple(sources), tuple(blocks), tuple(outputs), {b.id: level[b.id] for b in blocks})
 
@@ -187,14 +224,14 @@ def _wrap(text: str, width: int = 14) -> list[str]:
     return list(min(splits, key=lambda ab: (max(len(ab[0]), len(ab[1])), len(ab[0]))))
 
 
-def _incoming(incoming: dict[str, Source], key: str, name: str, detail: str) -> str:
+def _incoming(incoming: dict[str, Source], key: str, name: str, details: tuple[str, ...]) -> str:
     sid = f"in:{key}"
-    incoming.setdefault(sid, Source(sid, "connector", name, (detail,)))
+    incoming.setdefault(sid, Source(sid, "connector", name, details))
     return sid
 
 
-def _connector(name: str, detail: str, feed: Feed) -> Block:
-    return Block(f"out:{name}", "connector", (feed,), name=name, details=(detail,))
+def _connector(name: str, details: tuple[str, ...], feed: Feed) -> Block:
+    return Block(f"out:{name}", "connector", (feed,), name=name, details=details)
 
 
 def _control_output(net: Netlist) -> Block:
@@ -206,14 +243,15 @@ def _part_mark(part: Part) -> PartMark:
     return PartMark(part.id, part_value(part))
 
 
-def _amplifier(net: Netlist, a: Amplifier, local) -> Block:
-    """An amplifier as drawn: its feeds with pots and input parts, IC, feedback capacitor."""
+def _amplifier(net: Netlist, a: Amplifier, local, drawn=lambda inp: True) -> Block:
+    """An amplifier as drawn: its feeds with pots and input parts, IC, feedback capacitor; the
+    source of a feed that is not ``drawn`` (its pot is elsewhere) is left as it is, not looked up."""
     parts = [p for p in net.parts if p.amplifier == a.id]
     feeds = []
     for inp in a.inputs:
         marks = tuple(_part_mark(p) for p in parts if p.jack == inp.jack)
         setting = _setting(net, inp.pot) if inp.pot else ""
-        feeds.append(Feed(local(inp.source), inp.weight, inp.pot, setting, marks))
+        feeds.append(Feed(local(inp.source) if drawn(inp) else inp.source, inp.weight, inp.pot, setting, marks))
     feedback = None
     if a.role == "lag":
         across = [p for p in parts if p.jack is None]

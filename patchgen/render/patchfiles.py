@@ -8,13 +8,18 @@ prediction, why this patch, a pump-up schedule) come from the caller.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 
 from patchgen.design.lqg import Design
+from patchgen.inputs.resources import is_shipped_file, shipped
+from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.as_patched import AsPatched, as_patched
 from patchgen.patch.netlist import Netlist
+from patchgen.patch.sign_check import SignStep, sign_check
 from patchgen.patch.static_check import StaticCheck, static_check, static_check_csv
 from patchgen.profiles.machine import MachineProfile
-from patchgen.render.diagram import diagram_pages, wiring_svg
+from patchgen.render.diagram import wiring_svg
+from patchgen.render.diagram_pages import diagram_pages
 from patchgen.render.margins_view import margin_cells, margins_json
 from patchgen.render.pottable import pots_csv
 from patchgen.render.sheet import SheetSection, SheetSummary, render_sheet
@@ -23,7 +28,8 @@ PATCH_FILES = ("netlist.json", "margins.json", "pots.csv", "static-check.csv", "
                "patch-sheet.md")
 
 
-def sheet_summary(d: Design, sections: Sequence[SheetSection] = (), judged: AsPatched | None = None) -> SheetSummary:
+def sheet_summary(d: Design, sections: Sequence[SheetSection] = (), judged: AsPatched | None = None,
+                  signs: tuple[SignStep, ...] = (), static: SheetSection | None = None) -> SheetSummary:
     """The design as the patch sheet summarises it: gains, poles, margins, estimator.
 
     Parameters
@@ -34,6 +40,10 @@ def sheet_summary(d: Design, sections: Sequence[SheetSection] = (), judged: AsPa
         Extra tables for the sheet, in order.
     judged : AsPatched, optional
         The patch judged as patched: its loops beside the design's ('Margins as patched').
+    signs : tuple of SignStep
+        The sign check (patchgen.patch.sign_check).
+    static : SheetSection, optional
+        The static check (:func:`static_section`).
 
     Returns
     -------
@@ -46,16 +56,26 @@ def sheet_summary(d: Design, sections: Sequence[SheetSection] = (), judged: AsPa
     kind = "none (all states measured)" if d.estimator is None else d.estimator.kind
     if d.estimator is not None and d.estimator.rolloff_s:
         kind += f", roll-off {d.estimator.rolloff_s:g} s"
-    return SheetSummary(design=d.spec.name, description=d.spec.description, states=list(d.states),
+    return SheetSummary(design=design_label(d.spec), description=d.spec.description, states=list(d.states),
                         K=[float(k) for k in d.K[0]], poles=list(d.closed_loop_poles), margins=margins,
                         estimator=kind, sections=list(sections), K_spread=[float(u) for u in d.spread.K[0]],
-                        judged=judged)
+                        judged=judged, signs=signs, static=static)
+
+
+def design_label(spec: DesignSpec) -> str:
+    """The design as the sheet names it: its name, and the file it was read from when that name is
+    a shipped design's but the file is not the shipped one ("bench-recommended (from my-copy.toml)")."""
+    if spec.name in shipped("design") and Path(spec.path).is_file() and not is_shipped_file("design", spec.name,
+                                                                                              spec.path):
+        return f"{spec.name} (from {spec.path})"
+    return spec.name
 
 
 def static_section(check: StaticCheck, net: Netlist) -> SheetSection:
     """The static check on the sheet: one row per amplifier (and u_c), a column per condition,
-    each cell the expected reading and its tolerance; the conditions and what the check leaves out
-    in the note (static-check.csv has a row per reading, with what each isolates)."""
+    each cell the expected reading and its tolerance; the conditions (with where each test voltage
+    and IC comes from) and what the check leaves out in the note (static-check.csv has a row per
+    reading, with what each isolates)."""
     names = [c.name for c in check.conditions]
     cells = {(r.condition, r.point): f"{r.expected_V:+.3f} ± {r.tolerance_V:.3f}".replace("-", "−")
              for r in check.readings}
@@ -112,7 +132,7 @@ def patch_files(d: Design, machine: MachineProfile, net: Netlist, sections: Sequ
     files = {"netlist.json": net.to_json(), "margins.json": margins_json(judged, net.design), "pots.csv": pots_csv(net),
              "static-check.csv": static_check_csv(check)}
     svg = wiring_svg(net)
-    html, md = render_sheet(net, sheet_summary(d, [*sections, static_section(check, net)], judged),
-                            diagram_pages(net), machine.procedure)
+    summary = sheet_summary(d, sections, judged, sign_check(net, machine), static_section(check, net))
+    html, md = render_sheet(net, summary, diagram_pages(net), machine.procedure)
     files.update({"wiring.svg": svg, "patch-sheet.html": html, "patch-sheet.md": md})
     return files

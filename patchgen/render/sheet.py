@@ -10,7 +10,6 @@ the same inputs give the same bytes.
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 
 import jinja2
@@ -19,22 +18,13 @@ from patchgen.design.precision import gain_text, significant_digits
 from patchgen.patch.as_patched import AsPatched
 from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
 from patchgen.patch.parts import fmt_value
-from patchgen.patch.reading import read
 from patchgen.patch.realization import STATE_UNITS
+from patchgen.patch.sign_check import SignStep
 from patchgen.profiles.machine import Procedure
+from patchgen.render.diagram_pages import PRINTED_MIN_PT, printed_scale, svg_size_mm
 from patchgen.render.diagram_symbols import SMALLEST_PT, dial_decimals, quantity_label, signed_label
 from patchgen.render.margins_view import patched_banner, patched_context
-
-SHEET_WIDTH_MM = 186.0  # the printed content's width: A4 and Letter's common 210 mm less 12 mm margins
-# The room the diagram gets on two printed pages, by the number of extra sections (bench
-# prediction, why this patch): a diagram taller than this at full width is shrunk to fit it ...
-DIAGRAM_ROOM_MM = {0: 96.0, 1: 96.0, 2: 68.0}
-DIAGRAM_ROOM_MM_MORE = 46.0
-# ... but never below the scale that prints its smallest text at this size: a diagram that needs
-# more room takes it (the sheet runs longer) rather than print labels nobody can read.
-PRINTED_MIN_PT = 6.0
-MM_PER_PT = 25.4 / 72.0
-PAGE_DIAGRAM_MM = 236.0  # one page's 250 mm of content less a heading and a caption: the tallest a diagram gets
+from patchgen.render.sign_sheet import sign_note, sign_rows
 
 
 @dataclass(frozen=True)
@@ -66,6 +56,8 @@ class SheetSummary:
     sections: list[SheetSection] = field(default_factory=list)
     K_spread: list[float] = field(default_factory=list)  # per gain, the design's (0: fully determined)
     judged: AsPatched | None = None  # the patch judged as patched: the sheet's 'Margins as patched'
+    signs: tuple[SignStep, ...] = ()  # the sign check (patchgen.patch.sign_check), a step per pot
+    static: SheetSection | None = None  # the static check, after the sign check
 
 
 def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[str, str]],
@@ -87,7 +79,7 @@ def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[
     ctx = sheet_context(netlist, summary, procedure)
     figures = [("", svg)] if isinstance(svg, str) else svg
     html = _env(autoescape=True).get_template("patch-sheet.html.j2").render(
-        **ctx, figures=[(caption, *_inline_svg(body, ctx["diagram_mm"])) for caption, body in figures])
+        **ctx, figures=[(caption, *_inline_svg(body)) for caption, body in figures])
     md = _env(autoescape=False).get_template("patch-sheet.md.j2").render(**ctx)
     return _end(html), _end(md)
 
@@ -122,7 +114,7 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "role": a.role,
         "carries": _carries(a),
         "inputs": [_input_text(inp, source_name) for inp in a.inputs],
-        "settings": _amp_settings(a, net.time_scale_s),
+        "settings": _amp_settings(a, net.time_scale_s, procedure.ic_input),
         "purpose": a.purpose,
     } for a in net.amplifiers]
 
@@ -132,20 +124,6 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
             "ic": "0 V" if a.ic_V is None else f"{a.ic_V:g} V",
             "carries": _carries(a)}
            for a in net.amplifiers if a.role in ("integrator", "lag")]
-
-    reading = read(net)
-    sign_checks = []
-    for p in net.pots:
-        sign = reading.path_sign(p.amplifier)
-        if sign is None:
-            continue
-        if p.source in sensors:
-            moved, pol = quantity_label(sensors[p.source].quantity), 1
-        else:
-            carried = amps[p.source].carries
-            moved, pol = quantity_label(carried.quantity), carried.polarity
-        sign_checks.append({"pot": p.id, "moved": moved, "through": p.source,
-                            "u_c": "+" if sign * pol > 0 else "−"})
 
     spread = summary.K_spread or [0.0] * len(summary.K)
     states, gain_notes = [], []
@@ -162,9 +140,6 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
     margins = [{"loop": loop, "figures": [(name, _fmt(v)) for name, v in figs.items()]}
                for loop, figs in summary.margins.items()]
 
-    # the diagram gets the room the extra sections leave on two printed pages (a third when it
-    # needs more to print its labels at PRINTED_MIN_PT: diagram_height_mm)
-    diagram_mm = DIAGRAM_ROOM_MM.get(len(summary.sections), DIAGRAM_ROOM_MM_MORE)
     judged = summary.judged
     banners = [patched_banner(judged)] if judged is not None else []
     return {
@@ -174,7 +149,6 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
                       + "; a nearly uncontrollable mode): further digits, and those of the pots set from it, "
                       "follow the computer's arithmetic, not the design.") if gain_notes else "",
         "parts": parts,
-        "diagram_mm": diagram_mm,
         "net": net,
         "summary": summary,
         "title": f"Patch sheet: {summary.design or net.design}",
@@ -185,10 +159,13 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "amplifiers": amplifiers,
         "wires": wires,
         "ics": ics,
-        "sign_checks": sign_checks,
+        "sign_checks": sign_rows(summary.signs, net, procedure.ic_input),
+        "sign_note": sign_note(procedure.ic_input),
+        "static": summary.static,
+        "static_tables": _column_groups(summary.static) if summary.static is not None else [],
         "checklist": procedure.steps("checklist", machine=net.machine_name, units=net.units,
                                      resolution=net.pot_resolution, reference_V=net.reference_V,
-                                     integrators=tuple(i["id"] for i in ics), signs=bool(sign_checks)),
+                                     integrators=tuple(i["id"] for i in ics), signs=bool(summary.signs)),
         "notes": list(net.notes),
         "sections": summary.sections,
         "resolution": f"{net.pot_resolution:g}",
@@ -196,6 +173,19 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "output_amp": net.output.source,
         "time_scale": time_scale_text(net),
     }
+
+
+STATIC_COLUMNS = 7  # conditions side by side in one static-check table: each reading fits its cell on one line
+
+
+def _column_groups(section: SheetSection) -> list[tuple[list[str], list[list[str]]]]:
+    """A table of many columns as several of at most STATIC_COLUMNS beside its first column."""
+    n = len(section.header) - 1
+    k = -(-n // STATIC_COLUMNS)
+    size = -(-n // k)
+    return [([section.header[0], *section.header[1 + i:1 + i + size]], [[r[0], *r[1 + i:1 + i + size]]
+                                                                         for r in section.rows])
+            for i in range(0, n, size)]
 
 
 def time_scale_text(net: Netlist) -> str:
@@ -238,14 +228,16 @@ def _input_text(inp, source_name) -> str:
     return f"{inp.jack} ← {source_name(inp.source)}{via}"
 
 
-def _amp_settings(a: Amplifier, time_scale_s: float) -> str:
+def _amp_settings(a: Amplifier, time_scale_s: float, ic_input: str) -> str:
     """An amplifier's element values; an integrator's mode when it is selected by a cord or is not
-    the machine's time scale (a GP-6's one mode goes without saying: the header says it)."""
+    the machine's time scale (a GP-6's one mode goes without saying: the header says it); its IC
+    with what its IC input (``ic_input``) is patched to."""
     parts = []
     if a.mode is not None and (a.mode.jumper or a.mode.k0_per_s * time_scale_s != 1.0):
         parts.append(f"{_mode_words(a.mode.name, a.mode.jumper or '')}: k0 {a.mode.k0_per_s:g} 1/s")
     if a.ic_V is not None:
-        parts.append(f"IC {a.ic_V:g} V")
+        parts.append(f"IC 0 V ({ic_input} grounded)" if a.ic_V == 0 else
+                     f"IC {a.ic_V:g} V ({ic_input} at {-a.ic_V:g} V)")
     if a.T_d_s is not None:
         parts.append(f"T_d {a.T_d_s:g} s")
     if a.rolloff_s is not None:
@@ -285,47 +277,22 @@ def _fmt(v: float | str) -> str:
     return v if isinstance(v, str) else _minus(f"{v:.4g}")
 
 
-@dataclass(frozen=True)
-class Placement:
-    """How a diagram sits on the sheet: its height cap and the size its smallest label prints at."""
-
-    room_mm: float  # what the sheet planned for it
-    height_mm: float  # its cap: the room, or more for PRINTED_MIN_PT, at most a page
-    printed_pt: float
-
-    @property
-    def note(self) -> str:
-        """What the sheet says under a diagram too tall for one page at PRINTED_MIN_PT."""
-        if self.printed_pt >= PRINTED_MIN_PT - 1e-9:
-            return ""
-        return (f"Too tall for one page at {PRINTED_MIN_PT:g} pt: its smallest labels print at "
-                f"{self.printed_pt:.1f} pt; zoom in on screen, or print wiring.svg larger.")
-
-
-def placement(svg: str, room_mm: float) -> Placement:
-    """Where a diagram may grow on the sheet: from the room planned for it up to the height that
-    prints its smallest label at PRINTED_MIN_PT, but never past one page (PAGE_DIAGRAM_MM). Its
-    size is read from the SVG's own width and height (pt); SMALLEST_PT is its smallest label."""
-    size = {k: float(v) for k, v in re.findall(r'\b(width|height)="([0-9.eE+-]+)pt"', svg.split(">", 1)[0])}
-    if set(size) != {"width", "height"}:
-        raise ValueError("the wiring SVG must give its width and height in pt")
-    width_mm, height_mm = size["width"] * MM_PER_PT, size["height"] * MM_PER_PT
-    needed = math.ceil(height_mm * PRINTED_MIN_PT / SMALLEST_PT)
-    cap = min(max(room_mm, needed), PAGE_DIAGRAM_MM)
-    scale = min(1.0, SHEET_WIDTH_MM / width_mm, cap / height_mm)
-    return Placement(room_mm, cap, SMALLEST_PT * scale)
-
-
-def _inline_svg(svg: str, room_mm: float) -> tuple[str, str]:
-    """The SVG without an XML declaration, scaled to the sheet's width and to at most its
-    :func:`placement` height; and the note that goes under it (empty when it prints at 6 pt)."""
+def _inline_svg(svg: str) -> tuple[str, str]:
+    """The SVG without an XML declaration, at the scale it prints at (its own size, shrunk to the
+    page: patchgen.render.diagram_pages.printed_scale); and the note that goes under it when its
+    smallest label prints under PRINTED_MIN_PT (a diagram the split could not bring to one page)."""
     body = svg.strip()
     if body.startswith("<?xml"):
         body = body[body.index("?>") + 2:].lstrip()
-    where = placement(body, room_mm)
-    tag = (f'<svg class="wiring" role="img" aria-label="wiring diagram" data-room-mm="{room_mm:g}" '
-           f'style="max-height: {where.height_mm:g}mm" ')
-    return body.replace("<svg ", tag, 1), where.note
+    width, height = svg_size_mm(body)
+    scale = printed_scale(body)
+    printed = SMALLEST_PT * scale
+    note = "" if printed >= PRINTED_MIN_PT - 1e-9 else (
+        f"Too large for one page at {PRINTED_MIN_PT:g} pt: its smallest labels print at {printed:.1f} pt; zoom in on "
+        "screen, or print wiring.svg larger.")
+    tag = (f'<svg class="wiring" role="img" aria-label="wiring diagram" data-scale="{scale:.4f}" '
+           f'style="width: {width * scale:.1f}mm; height: {height * scale:.1f}mm" ')
+    return body.replace("<svg ", tag, 1), note
 
 
 def _env(autoescape: bool) -> jinja2.Environment:

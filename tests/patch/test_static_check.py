@@ -176,3 +176,35 @@ def test_a_flip_that_leaves_no_steady_output_counts_as_caught():
     for cname, w in singular:
         reading = next(r for r in check.readings if r.condition == cname and r.point == w.amplifier)
         assert w.pot in reading.isolates
+
+
+def test_every_ic_says_where_its_voltage_comes_from():
+    """Each integrator's test IC is its IC jack at minus its value from a spare pot of its own (the
+    pot unused by the patch, its setting the voltage over the reference, from the reference of the
+    voltage's sign), as many integrators at a time as pots are spare; every integrator in one
+    condition; none at 0 V (before, thesis-case2's ICs were rounded to a tenth of a volt and all
+    read 0). Before, the sheet said 'at minus the value listed' and no more."""
+    from patchgen.patch.static_check import spare_pots
+    from tests.shipped import patch_of, shipped_cases
+
+    seen_groups = False
+    for name, machine_id in shipped_cases():
+        made = patch_of(name, machine_id)
+        if made is None:
+            continue
+        net, machine = made[0].netlist, made[1]
+        check = static_check(net, machine)
+        ints = [a.id for a in net.amplifiers if a.role == "integrator"]
+        ics = [c for c in check.conditions if c.ic_V]
+        assert sorted(a for c in ics for a in c.ic_V) == sorted(ints), (name, machine_id)
+        free = spare_pots(net, machine)
+        seen_groups |= len(ics) > 1
+        for c in ics:
+            assert len(c.ic_V) <= max(1, len(free)) and c.name == ("IC" if len(ics) == 1 else "IC " + " ".join(c.ic_V))
+            for k, (a, v) in enumerate(c.ic_V.items()):
+                assert abs(v) >= 0.01, (name, machine_id, c.ic_V)  # a step of the pot at least: no IC grounded
+                sign = "−" if v > 0 else "+"  # the IC jack at minus the value
+                said = (f"{a}'s {machine.procedure.ic_input} at {sign}{abs(v):g} V (spare pot {free[k]} at "
+                        f"{abs(v) / 10:.3f} from {sign}10 V)")
+                assert said in c.setup and said in c.source, (name, machine_id, c.setup)
+    assert seen_groups  # bench-lqg: four integrators, one pot spare

@@ -62,10 +62,10 @@ def test_steps_apply_to_the_patch_they_are_for():
     common = dict(machine="M", resolution=0.001, reference_V=10.0)
     bare = proc.steps("checklist", units=1, integrators=(), signs=False, **common)
     full = proc.steps("checklist", units=2, integrators=("A1", "A2"), signs=True, **common)
-    assert not any("IC: with each IC jack" in s for s in bare)
+    assert not any("IC: each IC jack" in s for s in bare)
     assert any("check each integrator (A1, A2) reads minus its IC-jack voltage" in s for s in full)
     assert "Check each sign with one feedback path at a time (all other pots at 0)." in bare
-    assert any("the sign table says" in s for s in full) and not any("the sign table says" in s for s in bare)
+    assert any("with the sign table" in s for s in full) and not any("with the sign table" in s for s in bare)
     assert any("(M, 2 units slaved together)" in s for s in full) and any("(M)." in s for s in bare)
     assert any("to 0.001." in s for s in bare)
     ops = proc.steps("operation", units=1, integrators=("A1", "A2"), signs=False, **common)

@@ -72,6 +72,26 @@ class Chromium:
             self._events = [m for m in self._events if m.get("sessionId") != session]
         return base64.b64decode(data)
 
+    def evaluate_printed(self, page: Path, expression: str):
+        """The value of a JavaScript ``expression`` on the HTML file ``page`` laid out for print
+        (CSS print media), returned by value (JSON)."""
+        target = self._call("Target.createTarget", url="about:blank")["targetId"]
+        session = self._call("Target.attachToTarget", targetId=target, flatten=True)["sessionId"]
+        try:
+            self._call("Page.enable", session=session)
+            self._call("Page.setLifecycleEventsEnabled", session=session, enabled=True)
+            self._call("Emulation.setEmulatedMedia", session=session, media="print")
+            loader = self._call("Page.navigate", session=session, url=page.as_uri())["loaderId"]
+            self._event(lambda m: m.get("sessionId") == session and m.get("method") == "Page.lifecycleEvent"
+                        and m["params"]["name"] == "load" and m["params"]["loaderId"] == loader)
+            reply = self._call("Runtime.evaluate", session=session, expression=expression, returnByValue=True)
+        finally:
+            self._call("Target.closeTarget", targetId=target)
+            self._events = [m for m in self._events if m.get("sessionId") != session]
+        if "exceptionDetails" in reply:
+            raise RuntimeError(f"chromium: {reply['exceptionDetails']}")
+        return reply["result"]["value"]
+
     def close(self) -> None:
         """Close the browser and wait for it."""
         try:

@@ -9,7 +9,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from patchgen.patch.netlist import Netlist, read_netlist
-from patchgen.render.diagram import diagram_pages, wiring_svg
+from patchgen.render.diagram import wiring_svg
+from patchgen.render.diagram_pages import diagram_pages
 from patchgen.render.diagram_symbols import quantity_label
 
 FIXTURE = Path(__file__).parents[1] / "fixtures" / "thesis-ch5.netlist.json"

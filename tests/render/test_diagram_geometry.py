@@ -19,8 +19,9 @@ from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
-from patchgen.render.diagram import diagram_pages, wiring_svg
+from patchgen.render.diagram import wiring_svg
 from patchgen.render.diagram_graph import unit_of, units
+from patchgen.render.diagram_pages import diagram_pages
 from patchgen.render.diagram_symbols import part_value
 from tests.conftest import design_path
 

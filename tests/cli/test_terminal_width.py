@@ -58,8 +58,9 @@ def test_design(env, spec):
 def test_check_with_faults(tmp_path, env):
     _run("patch", "bench-lqg", "-o", "p", "--no-predict", cwd=tmp_path)
     rows = list(csv.DictReader((tmp_path / "p" / "static-check.csv").open()))
-    for i, r in enumerate(rows):  # one integrator's initial condition read with the wrong sign
-        r["measured_V"] = f"{float(r['expected_V']) * (-1 if i == 3 else 1):.4f}"
+    wrong = next(i for i, r in enumerate(rows) if abs(float(r["expected_V"])) > 1.0)
+    for i, r in enumerate(rows):  # one reading well away from 0 V read with the wrong sign
+        r["measured_V"] = f"{float(r['expected_V']) * (-1 if i == wrong else 1):.4f}"
     with (tmp_path / "filled.csv").open("w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]), lineterminator="\n")
         w.writeheader()

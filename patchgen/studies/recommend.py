@@ -38,7 +38,10 @@ its departures from the spec (patchgen.studies.departures), so the one chosen na
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
+
+import numba
 
 from patchgen.bench.diagnosis import bench_margins, diagnose
 from patchgen.bench.simulate import simulate
@@ -222,18 +225,23 @@ def evaluate(c: Candidate, bench: BenchProfile, machine: MachineProfile, scenari
     done = 0
     outcomes: tuple[ScenarioOutcome, ...] = ()
     while True:
-        for sc in scenarios:
-            have = len(runs_of[sc.name])
-            n = min(ROUND_RUNS, max_runs - have)
-            if n <= 0:
-                continue
-            res = simulate(c.netlist, plant, bench, machine, sc, seed=seed, runs=n, first_run=have,
-                           keep_history=have == 0, bench_spread=bool(bench.uncertainty.ranges))
-            runs_of[sc.name].extend(res.runs)
-            swing[sc.name] = max(swing[sc.name], _swing(res, machine))
-            done += n
-            if progress is not None:
-                progress(done)
+        jobs = [(sc, len(runs_of[sc.name]), min(ROUND_RUNS, max_runs - len(runs_of[sc.name]))) for sc in scenarios]
+        jobs = [j for j in jobs if j[2] > 0]
+
+        def one(job):
+            sc, have, n = job
+            return simulate(c.netlist, plant, bench, machine, sc, seed=seed, runs=n, first_run=have,
+                            keep_history=have == 0, bench_spread=bool(bench.uncertainty.ranges))
+
+        # a round's scenarios side by side, a thread each (the engine releases the GIL): a scenario's
+        # runs depend on their seeds alone, so the figures are the same on any number of threads
+        with ThreadPoolExecutor(max(1, min(len(jobs), numba.get_num_threads()))) as pool:
+            for (sc, _, n), res in zip(jobs, pool.map(one, jobs)):
+                runs_of[sc.name].extend(res.runs)
+                swing[sc.name] = max(swing[sc.name], _swing(res, machine))
+                done += n
+                if progress is not None:
+                    progress(done)
         outcomes = tuple(outcome(sc.name, runs_of[sc.name], swing[sc.name]) for sc in scenarios)
         full = all(len(v) >= max_runs for v in runs_of.values())
         if full or (early_stop and decision(outcomes) != "undecided"):

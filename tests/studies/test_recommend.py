@@ -294,3 +294,22 @@ def test_the_dead_reduced_observer_loop_of_section_5_3_holds_nowhere():
     for name in STANDARD:
         r = simulate(net, plant, BENCH, m, load_scenario(name), runs=20, keep_history=False)
         assert r.distribution.fraction_held == 0.0, name
+
+
+def test_the_ranking_is_the_same_on_one_thread_and_on_two():
+    """A round's scenarios run side by side, a thread each: the figures do not depend on it."""
+    import numba
+
+    spec = load_spec(design_path("bench-recommended"))
+    m, b, sc = load_machine("gp6"), load_bench("uw-1991"), (load_scenario("finger-push"), load_scenario("step-cart"))
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = recommend(spec, m, b, sc, runs=8)
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        two = recommend(spec, m, b, sc, runs=8)
+    finally:
+        numba.set_num_threads(before)
+    assert table_rows(one) == table_rows(two)
+    assert [[(r.run, r.max_abs_theta_deg, r.max_abs_s_m) for o in c.outcomes for r in o.results] for c in one.ranked] \
+        == [[(r.run, r.max_abs_theta_deg, r.max_abs_s_m) for o in c.outcomes for r in o.results] for c in two.ranked]

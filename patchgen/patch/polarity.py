@@ -81,6 +81,7 @@ def search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachinePro
         if not all(fit.possible(i, m) for i, m in enumerate(masks)):
             continue  # a block that fits for no choice of inverters: nothing here fits
         cand = [1 << n for n in range(union.bit_length()) if union >> n & 1]  # sorted names
+        ms = [m for _, m in mism]
         for k in range(len(cand) + 1):
             if best is not None and k >= best[0][0]:
                 break  # k inverters alone cost as much as the best: so does every larger k
@@ -90,7 +91,8 @@ def search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachinePro
                 shared = sum(inv)
                 # a block with a mismatched term no shared inverter serves gets a pre-summer
                 # (a differentiator takes a single input: a pre-summer feeds it fine)
-                cost = (k + sum(1 for _, m in mism if m & ~shared), k)
+                left = ~shared
+                cost = (k + sum(1 for m in ms if m & left), k)
                 if best is not None and cost >= best[0]:
                     continue
                 pre = {i: m & ~shared for i, m in mism if m & ~shared}

@@ -193,10 +193,9 @@ def static_check(net: Netlist, machine: MachineProfile) -> StaticCheck:
                 f"{patched}; the other sensor inputs grounded; {', '.join(group)} input at"), spare))
     readings = []
     for c in conds:
-        base = solve(net, wires, c)
-        for a in net.amplifiers:
-            readings.append(_reading(net, wires, machine, c, a.id, base))
-        readings.append(_reading(net, wires, machine, c, "u_c", base))
+        base, perturbed = solve(net, wires, c), _perturbed(net, wires, machine, c)
+        for point in [a.id for a in net.amplifiers] + ["u_c"]:
+            readings.append(_reading(net, wires, c, point, base, perturbed))
     unchecked = [f"{a}: its input network ({the_machine(machine.name)} cannot patch it as a summer)"
                  for a in dynamic if a not in switchable]
     if net.parts:
@@ -271,29 +270,39 @@ def _scaled(net: Netlist, wires: list[Wire], machine: MachineProfile, cond: Cond
     return Condition(cond.name, {}, ic, (), cond.setup)
 
 
-def _reading(net: Netlist, wires: list[Wire], machine: MachineProfile, cond: Condition, point: str,
-             base: dict[str, float]) -> StaticReading:
+def _perturbed(net: Netlist, wires: list[Wire], machine: MachineProfile, cond: Condition) -> tuple[list, list]:
+    """Every amplifier's output under a condition with each input in turn off by its worst error,
+    and with each input's sign flipped (None where the flip closes a loop of gain exactly 1: no
+    steady output at all): solved once per condition, read by each of its readings."""
+    res = machine.pot_resolution
+    moved, flipped = [], []
+    for k, w in enumerate(wires):
+        err = (w.weight * res / 2 if w.pot else 0.0) + INTERNAL_TOLERANCE * abs(w.gain)
+        moved.append(solve(net, wires[:k] + [Wire(w.amplifier, w.source, w.gain + err, w.pot, w.jack, w.weight)]
+                           + wires[k + 1:], cond))
+        try:
+            flipped.append(solve(net, wires[:k] + [Wire(w.amplifier, w.source, -w.gain, w.pot, w.jack, w.weight)]
+                                 + wires[k + 1:], cond))
+        except np.linalg.LinAlgError:
+            flipped.append(None)
+    return moved, flipped
+
+
+def _reading(net: Netlist, wires: list[Wire], cond: Condition, point: str, base: dict[str, float],
+             perturbed: tuple[list, list]) -> StaticReading:
     """One reading with its tolerance (each input's worst error, summed) and what it isolates."""
     amp = net.output.source if point == "u_c" else point
     expect = base[amp]
-    res = machine.pot_resolution
+    moved, flipped = perturbed
     squares = (INTERNAL_TOLERANCE * expect) ** 2
-    for k, w in enumerate(wires):
-        err = (w.weight * res / 2 if w.pot else 0.0) + INTERNAL_TOLERANCE * abs(w.gain)
-        moved = list(wires)
-        moved[k] = Wire(w.amplifier, w.source, w.gain + err, w.pot, w.jack, w.weight)
-        squares += (solve(net, moved, cond)[amp] - expect) ** 2
+    for m in moved:  # in wire order, as a sum that gives the same bytes every time
+        squares += (m[amp] - expect) ** 2
     # independent errors add in quadrature (three times the root sum of squares covers their sum's
     # spread when each is a uniform error of that half-width: its standard deviation is 1/sqrt(3))
     tol = METER_RESOLUTION_V + math.sqrt(3.0 * squares)
     isolates = []
-    for k, w in enumerate(wires):  # an input whose sign flipped would move this reading past its tolerance
-        flipped = list(wires)
-        flipped[k] = Wire(w.amplifier, w.source, -w.gain, w.pot, w.jack, w.weight)
-        try:
-            reading = solve(net, flipped, cond)[amp]
-        except np.linalg.LinAlgError:  # the flip closes a loop of gain exactly 1: no steady output at all
-            reading = math.inf
+    for w, f in zip(wires, flipped):  # an input whose sign flipped would move this reading past its tolerance
+        reading = math.inf if f is None else f[amp]
         if abs(reading - expect) > tol:
             isolates.append(w.pot or f"{w.amplifier} {w.jack}")
     return StaticReading(cond.name, point, expect, tol, tuple(dict.fromkeys(isolates)))

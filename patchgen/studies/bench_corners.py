@@ -18,6 +18,7 @@ import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from patchgen.bench.bench_spread import active_ranges
@@ -215,11 +216,23 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
             progress(total, total)
         return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
                           tuple(got[:len(corners)]), rest, tuple(got[len(corners):]))
-    done_corners = []
-    for v in corners:
-        done_corners.append(run(v))
-        if stop(done_corners):
-            break
+    done_corners: list[CornerOutcome] = []
+    group = max(1, numba.get_num_threads())  # corners run a few at once, on every core, then stop is asked
+    for i in range(0, len(corners), group):
+        chunk = corners[i:i + group]
+        todo = [v for v in chunk if not any(k.values == v for k in known)]
+        ran = dict(zip(map(_frozen, todo), simulate_points(net, plant, bench, machine, scenario, todo,
+                                                            runs=corner_runs, seed=seed, ideal=ideal) if todo else []))
+        for v in chunk:  # one at a time, as if run alone: the study ends at the same corner
+            done += 1
+            done_corners.append(next((k for k in known if k.values == v), None) or counted_at(v, ran[_frozen(v)]))
+            if progress is not None:
+                progress(done, total)
+            if stop(done_corners):
+                break
+        else:
+            continue
+        break
     return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
                       tuple(done_corners), rest, tuple(run(v) for v in singles))
 

@@ -45,15 +45,21 @@ def _fake_bench(monkeypatch, seed: int) -> list:
     monkeypatch.setattr(robust, "design_on", lambda sp, machine, bench: SimpleNamespace(spec=sp, plant=None))
     monkeypatch.setattr(robust, "build_patch", lambda d, machine, units: SimpleNamespace(point=next(points)))
 
+    def at(net, scenario, corner, runs):
+        held, excursion = _table(seed, net.point, scenario.name, corner)
+        ran.append((net.point, scenario.name, corner))
+        return [SimpleNamespace(held=i < held, overloads=(), fall_time_s=None, trip_time_s=None,
+                                max_abs_s_m=excursion, max_abs_u_c_V=1.0, actuator_limit_time_s=0.0)
+                for i in range(runs)]
+
     def simulate(net, plant, bench, machine, scenario, *, runs, **_):
-        held, excursion = _table(seed, net.point, scenario.name, _corner(bench))
-        ran.append((net.point, scenario.name, _corner(bench)))
-        return SimpleNamespace(runs=[SimpleNamespace(held=i < held, overloads=(), fall_time_s=None,
-                                                     trip_time_s=None, max_abs_s_m=excursion, max_abs_u_c_V=1.0,
-                                                     actuator_limit_time_s=0.0)
-                                     for i in range(runs)])
+        return SimpleNamespace(runs=at(net, scenario, _corner(bench), runs))
+
+    def simulate_points(net, plant, bench, machine, scenario, points, *, runs, **_):
+        return [at(net, scenario, tuple(p[k] for k in ("K_U", "tau", "dead_zone_V")), runs) for p in points]
 
     monkeypatch.setattr(bench_corners, "simulate", simulate)
+    monkeypatch.setattr(bench_corners, "simulate_points", simulate_points)
     return ran
 
 

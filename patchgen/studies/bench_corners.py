@@ -24,11 +24,11 @@ import numpy as np
 from patchgen.bench.bench_spread import active_ranges
 from patchgen.bench.points import simulate_points
 from patchgen.bench.results import RunSummary
-from patchgen.bench.simulate import SimResult, simulate
+from patchgen.bench.simulate import SimResult
 from patchgen.inputs.scenario import Scenario
 from patchgen.patch.netlist import Netlist
 from patchgen.plant.equations import PlantParams
-from patchgen.profiles.bench import BenchProfile, bench_at, nominal
+from patchgen.profiles.bench import BenchProfile, nominal
 from patchgen.profiles.machine import MachineProfile
 from patchgen.studies import worst_case
 from patchgen.studies.ranking import ScenarioOutcome, outcome
@@ -189,53 +189,31 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
                           tuple(counted_at(v, r) for v, r in screened_ends) if ends else (), screened)
     corners, rest = corner_values(bench, ranges)
     singles = [{k: v} for k, r in ranges.items() for v in r] if ends else []
-    total, done = len(corners) + len(singles), 0
+    total = len(corners) + len(singles)
 
-    def run(values):
-        nonlocal done
-        ran = next((k for k in known if k.values == values), None)
-        if ran is not None:
-            done += 1
-            if progress is not None:
-                progress(done, total)
-            return ran
-        res = simulate(net, plant, bench_at(bench, values), machine, scenario, seed=seed, runs=corner_runs,
-                       keep_history=False, ideal=ideal)
-        done += 1
-        if progress is not None:
-            progress(done, total)
-        return counted_at(values, res.runs)
+    def batch(points: list[dict]) -> list[CornerOutcome]:
+        """The points' outcomes: those in ``known`` as they are, the rest run in one batch (every core)."""
+        todo = [v for v in points if not any(k.values == v for k in known)]
+        ran = iter(simulate_points(net, plant, bench, machine, scenario, todo, runs=corner_runs, seed=seed,
+                                   ideal=ideal) if todo else [])
+        return [next((k for k in known if k.values == v), None) or counted_at(v, next(ran)) for v in points]
 
-    if stop is None:  # every point at once: one batch, on every core
-        todo = [v for v in corners + singles if not any(k.values == v for k in known)]
-        ran = dict(zip(map(_frozen, todo), simulate_points(net, plant, bench, machine, scenario, todo, runs=corner_runs,
-                                                            seed=seed, ideal=ideal) if todo else []))
-        got = [next((k for k in known if k.values == v), None) or counted_at(v, ran[_frozen(v)])
-               for v in corners + singles]
-        if progress is not None:
-            progress(total, total)
-        return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
-                          tuple(got[:len(corners)]), rest, tuple(got[len(corners):]))
+    # every corner at once; with a stop, a few at once (the cores) and stop asked after each, as if
+    # each ran alone: the study ends at the same corner
+    group = len(corners) if stop is None else max(1, numba.get_num_threads())
     done_corners: list[CornerOutcome] = []
-    group = max(1, numba.get_num_threads())  # corners run a few at once, on every core, then stop is asked
     for i in range(0, len(corners), group):
-        chunk = corners[i:i + group]
-        todo = [v for v in chunk if not any(k.values == v for k in known)]
-        ran = dict(zip(map(_frozen, todo), simulate_points(net, plant, bench, machine, scenario, todo,
-                                                            runs=corner_runs, seed=seed, ideal=ideal) if todo else []))
-        for v in chunk:  # one at a time, as if run alone: the study ends at the same corner
-            done += 1
-            done_corners.append(next((k for k in known if k.values == v), None) or counted_at(v, ran[_frozen(v)]))
+        for c in batch(corners[i:i + group]):
+            done_corners.append(c)
             if progress is not None:
-                progress(done, total)
-            if stop(done_corners):
+                progress(len(done_corners), total)
+            if stop is not None and stop(done_corners):
                 break
         else:
             continue
         break
+    done_ends = batch(singles)
+    if progress is not None and singles:
+        progress(len(done_corners) + len(done_ends), total)
     return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
-                      tuple(done_corners), rest, tuple(run(v) for v in singles))
-
-
-def _frozen(values: dict[str, float]) -> tuple:
-    return tuple(sorted(values.items()))
+                      tuple(done_corners), rest, tuple(done_ends))

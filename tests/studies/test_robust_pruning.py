@@ -34,11 +34,6 @@ def _table(seed: int, point: int, scenario: str, corner: tuple) -> tuple[int, fl
     return robust.SEARCH_RUNS - r.choice(range(most + 1)), base + r.choice((0.0, 0.0, 0.0, 0.01, 0.02))
 
 
-def _corner(bench) -> tuple:
-    a = bench.actuator
-    return a.K_U, a.tau, a.dead_zone_V
-
-
 def _fake_bench(monkeypatch, seed: int) -> list:
     """Replace design, patch and simulation by the table; returns the list of simulations run."""
     points, ran = iter(range(10 ** 6)), []
@@ -52,13 +47,9 @@ def _fake_bench(monkeypatch, seed: int) -> list:
                                 max_abs_s_m=excursion, max_abs_u_c_V=1.0, actuator_limit_time_s=0.0)
                 for i in range(runs)]
 
-    def simulate(net, plant, bench, machine, scenario, *, runs, **_):
-        return SimpleNamespace(runs=at(net, scenario, _corner(bench), runs))
-
     def simulate_points(net, plant, bench, machine, scenario, points, *, runs, **_):
         return [at(net, scenario, tuple(p[k] for k in ("K_U", "tau", "dead_zone_V")), runs) for p in points]
 
-    monkeypatch.setattr(bench_corners, "simulate", simulate)
     monkeypatch.setattr(bench_corners, "simulate_points", simulate_points)
     return ran
 

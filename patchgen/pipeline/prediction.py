@@ -1,6 +1,7 @@
 """A patch predicted on the bench, for its sheet: the standard scenarios simulated
 (patchgen.bench.prediction), the wired loop linearised on the bench, and, when the bench states
-ranges, the long hold at every corner of them. Computed here; render/bench_sheet only words it."""
+ranges, the long hold at their corners (every corner, or the worst searched for past three ranges:
+patchgen.studies.bench_corners). Computed here; render/bench_sheet only words it."""
 
 from __future__ import annotations
 
@@ -73,7 +74,7 @@ def predict_on_bench(d: Design, net: Netlist, machine: MachineProfile, bench: Be
         Runs already simulated, by scenario name (see patchgen.bench.prediction.predict).
     corners : BenchStudy, optional
         The patch at the corners of the bench's ranges, when already run; when the bench states
-        ranges and none is given, the hold is run at every corner.
+        ranges and none is given, the hold is run at its corners (patchgen.studies.bench_corners.study).
 
     Returns
     -------

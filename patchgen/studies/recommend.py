@@ -22,10 +22,11 @@ candidate order. Figures are rounded before ranking so the order is deterministi
 
 When the bench states ranges for its parameters (its ``[uncertainty]`` table), every run draws its
 bench from them, so the held fractions are over the bench's uncertainty; each stable candidate is
-also run at every corner of the ranges and at each end of each range in its weakest scenario
-(ties: the longest; CORNER_RUNS seeds each, patchgen.studies.bench_corners), which names its
-weakest parameter; the worst corner's held fraction ranks right after the verdict, and a candidate is chosen only if it
-held in at least TARGET of the runs at every corner. When none is chosen, one whose gains are
+also run at the corners of the ranges (every corner, or the worst searched for past three ranges)
+and at each end of each range in its weakest scenario (ties: the longest; CORNER_RUNS seeds each,
+patchgen.studies.bench_corners), which names its weakest parameter; the worst corner's held fraction
+ranks right after the verdict, and a candidate is chosen only if it held in at least TARGET of the
+runs at its worst corner. When none is chosen, one whose gains are
 chosen over the corners joins them (patchgen.studies.robust, ``extra_candidates``) before any
 variant of the spec: a search over weights costs a study per weight, worth it only when the spec's
 own realisations do not hold at their worst corner.

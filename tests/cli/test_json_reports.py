@@ -9,6 +9,7 @@ import json
 from click.testing import CliRunner
 
 from patchgen.cli import cli
+from patchgen.inputs.spec import load_spec
 
 
 def _run(*argv):
@@ -20,9 +21,10 @@ def test_design_json_carries_the_actuator_and_the_notes_it_prints():
     text, _ = _run("design", "bench-recommended")
     r, got = _run("design", "bench-recommended", "--json")
     assert r.exit_code == 0, r.output
-    assert got["actuator_K_U"] == 14.01 and got["actuator_tau_s"] == 0.2
+    actuator = load_spec("bench-recommended").actuator  # the figures as the spec states them
+    assert got["actuator_K_U"] == actuator.K_U and got["actuator_tau_s"] == actuator.tau
     assert f"K_U = {got['actuator_K_U']} N/V, tau = {got['actuator_tau_s']} s" in text.output
-    assert len(got["notes"]) == 1 and "dead zone (0.2 V)" in got["notes"][0]
+    assert len(got["notes"]) == 1 and f"dead zone ({actuator.dead_zone_V} V)" in got["notes"][0]
     _, gain_only = _run("design", "thesis-ch5", "--json")
     assert gain_only["notes"] == [] and gain_only["actuator_tau_s"] is None
 

@@ -1,7 +1,7 @@
 """The engine's cost per run-step against its floor, in the same process and the same run.
 
-Both run one block of 64 runs of hold-120s on the shipped bench-recommended patch, on one
-thread, from the same draws: patchgen's engine (patchgen.bench.kernel.run_block) and the lean
+Both run one block of runs (the engine's LANES) of hold-120s on the shipped bench-recommended
+patch, on one thread, from the same draws: patchgen's engine (patchgen.bench.kernel.run_block) and the lean
 loop of benchmarks/engine_floor.py, which is the same closed loop written out by hand. The
 lean loop must end every run where the engine does (it is checked before anything is timed),
 so the ratio compares the same work. Prints ns of CPU per run-step for each (best of --repeats
@@ -29,7 +29,7 @@ from engine_floor import lean_block  # noqa: E402
 from patchgen.bench import kernel  # noqa: E402
 from patchgen.bench.circuit import compile_circuit  # noqa: E402
 from patchgen.bench.configure import engine_config  # noqa: E402
-from patchgen.bench.engine import draw_batch, run_batch  # noqa: E402
+from patchgen.bench.engine import LANES, draw_batch, run_batch  # noqa: E402
 from patchgen.bench.lanes import A_DEAD_ZONE, A_FORCE_LIMIT, A_K_U, A_TAU  # noqa: E402
 from patchgen.inputs.scenario import load_scenario  # noqa: E402
 from patchgen.patch.build import build_patch  # noqa: E402
@@ -37,7 +37,6 @@ from patchgen.pipeline.design import run_design  # noqa: E402
 from patchgen.pipeline.inputs import load_inputs  # noqa: E402
 
 TARGET = 1.5
-RUNS = 64
 
 
 def _load() -> str:
@@ -50,7 +49,7 @@ def config():
     design = run_design(inputs).design
     circuit = compile_circuit(build_patch(design, inputs.machine), inputs.machine, inputs.bench)
     cfg, _ = engine_config(circuit, design.plant, inputs.bench, inputs.machine, load_scenario("hold-120s"))
-    draws = draw_batch(cfg, [np.random.default_rng([1, i]) for i in range(RUNS)])
+    draws = draw_batch(cfg, [np.random.default_rng([1, i]) for i in range(LANES)])
     return cfg, draws
 
 
@@ -89,12 +88,12 @@ def main() -> int:
         print(f"the lean loop is not the engine's closed loop: run-steps {done} against {steps:.0f}, "
               f"final states apart by up to {diff:.3g}")
         return 1
-    args = (0, RUNS, draws, *cfg.records, out_records(cfg, draws))
+    args = (0, LANES, draws, *cfg.records, out_records(cfg, draws))
     t_engine = best_cpu(lambda: kernel.run_block(*args), opts.repeats)
     t_lean = best_cpu(lambda: lean(cfg, draws), opts.repeats)
     ns_engine, ns_lean = t_engine / done * 1e9, t_lean / done * 1e9
     ratio = ns_engine / ns_lean
-    print(f"{RUNS} runs of hold-120s on bench-recommended, one thread, {done / 1e6:.2f} M run-steps, "
+    print(f"{LANES} runs of hold-120s on bench-recommended, one thread, {done / 1e6:.2f} M run-steps, "
           f"the same final states to the bit")
     print(f"engine     {ns_engine:6.1f} ns CPU per run-step")
     print(f"lean loop  {ns_lean:6.1f} ns CPU per run-step")

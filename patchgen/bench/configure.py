@@ -21,7 +21,16 @@ from patchgen.bench.kernel import (
     Settings,
     Wiring,
 )
-from patchgen.bench.lanes import A_DEAD_ZONE, A_FORCE_LIMIT, A_K_U, ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, ACT_MOTOR
+from patchgen.bench.lanes import (
+    A_DEAD_ZONE,
+    A_FORCE_LIMIT,
+    A_K_U,
+    ACT_GAIN,
+    ACT_LAG,
+    ACT_LAG_ZERO,
+    ACT_MOTOR,
+    input_groups,
+)
 from patchgen.bench.noise_drift import NoiseAndDrift, noise_and_drift
 from patchgen.bench.results import SimSettings
 from patchgen.inputs.drive_fields import LAG_MODELS, motor_of
@@ -145,6 +154,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
             t1s.append(d.time_s + d.duration_s)
             vals.append(d.force_N)
 
+    groups = input_groups(circuit.in_ptr, circuit.in_src, circuit.in_gain,
+                          zero_row=circuit.n_sensors + circuit.n_amps + len(f_proc))  # sig's zero row
     cfg = EngineConfig(
         settings=Settings(
             dt=float(step), steps=int(n_steps), stride=int(stride), saturation=float(imp.saturation_V),
@@ -158,7 +169,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         wiring=Wiring(kind=_i64(circuit.amp_kind), in_ptr=_i64(circuit.in_ptr), in_src=_i64(circuit.in_src),
                       in_gain=_f64(circuit.in_gain), param1=_f64(circuit.param1),
                       param2=_f64(circuit.param2), ic=_f64(circuit.ic_V),
-                      drift=_f64(_drifts(circuit, levels, machine))),
+                      drift=_f64(_drifts(circuit, levels, machine)), group_ptr=groups[0], group_src=groups[1],
+                      group_gain=groups[2]),
         disturbances=Disturbances(kind=_i64(kinds), t0=_f64(t0s), t1=_f64(t1s), value=_f64(vals)),
         plant=_with_cut(plant_vector(with_rotor(plant, motor)), cut),
         plant_spread=_f64([spread.get(k, 0.0) for k in SPREAD_ORDER]),

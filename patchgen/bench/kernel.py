@@ -38,6 +38,10 @@ import numpy as np
 from patchgen.bench.circuit import DIFFERENTIATOR
 from patchgen.bench.lanes import (
     FILTER_ROWS,
+    KX_FORCE,
+    KX_LIMITED,
+    KX_RATE,
+    KX_ROWS,
     N_ACTUATOR,
     N_ACTUATOR_ROWS,
     actuator_rates,
@@ -51,8 +55,8 @@ from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "92b32fdf95c0d4fd"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
-LANES = 64  # runs per block
+COMPILED_IN = "117252e78f65ff11"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+LANES = 128  # runs per block (fewer, and the per-step work that is not per lane weighs more)
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
 N_STATES = len(PLANT_STATES)
 S, THETA = PLANT_STATES.index("s"), PLANT_STATES.index("theta")
@@ -68,6 +72,9 @@ HISTORY_CHANNELS = ("t",) + PLANT_STATES + ("s_ref", "u_c", "force")
 H_T, H_S_REF, H_U_C, H_FORCE = (HISTORY_CHANNELS.index(c) for c in ("t", "s_ref", "u_c", "force"))
 H_STATE = HISTORY_CHANNELS.index(PLANT_STATES[0])  # the plant state, N_STATES channels
 H_AMPS = len(HISTORY_CHANNELS)  # the amplifier outputs, in evaluation order
+# each lane's running figures: sum of theta^2, the maxima of |theta|, |s|, |u_c|, |force|, the time at the limit
+F_SUM_TH2, F_MAX_TH, F_MAX_S, F_MAX_UC, F_MAX_F, F_LIMIT = range(6)
+N_FIGURES = 6
 # cached on disk; IEEE arithmetic (see above); no Python exceptions for x / 0
 _JIT = {"cache": True, "error_model": "numpy"}
 
@@ -132,6 +139,9 @@ class Wiring(NamedTuple):
     param2: np.ndarray
     ic: np.ndarray  # V
     drift: np.ndarray  # V/s magnitude (its sign is drawn per run)
+    group_ptr: np.ndarray  # each amplifier's inputs in groups of TERMS, as the loop sums them
+    group_src: np.ndarray  # (patchgen.bench.lanes.input_groups)
+    group_gain: np.ndarray
 
 
 class Disturbances(NamedTuple):
@@ -222,7 +232,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     raw = np.zeros((na, nl))
     kp = np.zeros((4, N_STATES, nl))  # RK4 slopes of the plant, amplifier and actuator states
     ka = np.zeros((4, na, nl))
-    kx = np.zeros((4, nl))
+    kx = np.zeros((4, KX_ROWS, nl))  # the actuator's slope, force and limit (see drive)
     acc = np.zeros((2, nl))  # a partial sum of inputs, and zeros
     xt = np.empty((N_STATES, nl))
     zt = np.empty((na, nl))
@@ -238,14 +248,11 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
             if wiring.kind[j] == DIFFERENTIATOR:
                 for l in range(nl):
                     za[j, l] -= raw[j, l] / wiring.param1[j]
-    forces = np.zeros((4, nl))
-    at_limit = np.zeros(nl, dtype=np.bool_)  # the command at the actuator's limit, at the step's start
-    lim_t = np.zeros(nl)
     tripped = np.zeros(nl, dtype=np.bool_)
     fallen = np.zeros(nl, dtype=np.bool_)
     alive = np.ones(nl, dtype=np.bool_)
     pinned = np.zeros((na, nl), dtype=np.bool_)  # clipped at a rail by the last update
-    sum_th2, mth, ms, muc, mf = np.zeros(nl), np.zeros(nl), np.zeros(nl), np.zeros(nl), np.zeros(nl)
+    fig = np.zeros((N_FIGURES, nl))  # each lane's running figures (F_*)
     n_alive = nl
     n_hist = max(0, min(nl, out.history.shape[0] - lo))
     for n in range(n_steps + 1):
@@ -263,28 +270,31 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
             X, Z, XA, XF = (xp, za, xa, xf) if st == 0 else (xt, zt, xat, xft)
             sensor_filters(X, XF, sensors, kf, st)
             circuit(X, Z, XF, s_ref, nz, sensors, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
-            drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, forces,
-                  at_limit, st)
+            drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, st)
             if st == 0:  # record and summarise time t; a run ends at the scenario's end or at a trip
                 for l in range(n_hist):
                     if alive[l] and (n % stride == 0 or n == n_steps or tripped[l]):
-                        _record(out, lo + l, l, t, xp, s_ref, sig, out_index, forces, ns)
+                        _record(out, lo + l, l, t, xp, s_ref, sig, out_index, kx, ns)
                 n_alive -= _summaries(n, t, n == n_steps, lo, alive, tripped, fallen, xp, raw, pinned,
-                                      sig, out_index, forces, at_limit, settings, sum_th2, mth, ms, muc, mf,
-                                      lim_t, over, out)
+                                      sig, out_index, kx, settings, fig, over, out)
         if n_alive == 0:
             break
         for i in range(N_STATES):  # the plant's (a sensor filter's states advance in sensor_filters)
             for l in range(nl):
                 xp[i, l] += h / 6.0 * (kp[0, i, l] + 2.0 * kp[1, i, l] + 2.0 * kp[2, i, l] + kp[3, i, l])
-        for j in range(na):
-            rail = clip and wiring.kind[j] != DIFFERENTIATOR  # a capacitor cannot charge past the rails
-            for l in range(nl):
-                v = za[j, l] + h / 6.0 * (ka[0, j, l] + 2.0 * ka[1, j, l] + 2.0 * ka[2, j, l] + ka[3, j, l])
-                pinned[j, l] = rail and (v > sat or v < -sat)
-                za[j, l] = (sat if v > sat else (-sat if v < -sat else v)) if rail else v
+        for j in range(na):  # a loop per case, without branches, so that each vectorises
+            if clip and wiring.kind[j] != DIFFERENTIATOR:  # a capacitor cannot charge past the rails
+                for l in range(nl):
+                    v = za[j, l] + h / 6.0 * (ka[0, j, l] + 2.0 * ka[1, j, l] + 2.0 * ka[2, j, l] + ka[3, j, l])
+                    pinned[j, l] = (v > sat) | (v < -sat)
+                    za[j, l] = sat if v > sat else (-sat if v < -sat else v)
+            else:
+                for l in range(nl):
+                    za[j, l] = za[j, l] + h / 6.0 * (ka[0, j, l] + 2.0 * ka[1, j, l] + 2.0 * ka[2, j, l] + ka[3, j, l])
+                    pinned[j, l] = False
         for l in range(nl):
-            xa[l] += h / 6.0 * (kx[0, l] + 2.0 * kx[1, l] + 2.0 * kx[2, l] + kx[3, l])
+            xa[l] += h / 6.0 * (kx[0, KX_RATE, l] + 2.0 * kx[1, KX_RATE, l] + 2.0 * kx[2, KX_RATE, l]
+                                + kx[3, KX_RATE, l])
         for i in range(FILTER_ROWS):
             for l in range(nl):
                 xf[i, l] += h / 6.0 * (kf[0, i, l] + 2.0 * kf[1, i, l] + 2.0 * kf[2, i, l] + kf[3, i, l])
@@ -330,15 +340,15 @@ def _stage_state(st, h, xp, za, xa, xf, kp, ka, kx, kf, xt, zt, xat, xft):
         for l in range(nl):
             zt[j, l] = za[j, l] + c * ka[st - 1, j, l]
     for l in range(nl):
-        xat[l] = xa[l] + c * kx[st - 1, l]
+        xat[l] = xa[l] + c * kx[st - 1, KX_RATE, l]
     for i in range(FILTER_ROWS):
         for l in range(nl):
             xft[i, l] = xf[i, l] + c * kf[st - 1, i, l]
 
 
 @nb.njit(**_JIT)
-def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_index, forces, at_limit,
-               settings, sum_th2, mth, ms, muc, mf, lim_t, over, out):
+def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_index, kx,
+               settings, fig, over, out):
     """Figures at time t of the lanes still running; the results of those whose run ends here.
     Returns how many ended. The running figures are updated in every lane (an ended lane's are
     no longer read), so that loop vectorises (the tests for an event with & and |, not the
@@ -349,14 +359,16 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
     nl = alive.shape[0]
     events = 0
     for l in range(nl):
-        th, s, u, f = abs(xp[THETA, l]), abs(xp[S, l]), abs(sig[out_index, l]), abs(forces[0, l])
-        sum_th2[l] += xp[THETA, l] * xp[THETA, l]
-        mth[l] = th if th > mth[l] else mth[l]
-        ms[l] = s if s > ms[l] else ms[l]
-        muc[l] = u if u > muc[l] else muc[l]
-        mf[l] = f if f > mf[l] else mf[l]
-        lim_t[l] = lim_t[l] + h if at_limit[l] & (not (end | tripped[l])) else lim_t[l]
-        events += alive[l] & (tripped[l] | ((th > fall) & (not fallen[l])))
+        th, s, u, f = abs(xp[THETA, l]), abs(xp[S, l]), abs(sig[out_index, l]), abs(kx[0, KX_FORCE, l])
+        fig[F_SUM_TH2, l] += xp[THETA, l] * xp[THETA, l]
+        fig[F_MAX_TH, l] = th if th > fig[F_MAX_TH, l] else fig[F_MAX_TH, l]
+        fig[F_MAX_S, l] = s if s > fig[F_MAX_S, l] else fig[F_MAX_S, l]
+        fig[F_MAX_UC, l] = u if u > fig[F_MAX_UC, l] else fig[F_MAX_UC, l]
+        fig[F_MAX_F, l] = f if f > fig[F_MAX_F, l] else fig[F_MAX_F, l]
+        at_limit = (kx[0, KX_LIMITED, l] != 0.0) & (not (end | tripped[l]))
+        fig[F_LIMIT, l] = fig[F_LIMIT, l] + h if at_limit else fig[F_LIMIT, l]
+    for l in range(nl):  # apart: a loop storing into one array (fig) vectorises
+        events += alive[l] & (tripped[l] | ((abs(xp[THETA, l]) > fall) & (not fallen[l])))
     overloads = 0
     for j in range(raw.shape[0]):
         for l in range(nl):
@@ -381,8 +393,9 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
         if last:
             for j in range(raw.shape[0]):
                 out.overload_first[r, j], out.overload_time[r, j] = over[0, j, l], over[1, j, l]
-            res[r, R_MAX_TH], res[r, R_MAX_S], res[r, R_RMS_TH] = mth[l], ms[l], math.sqrt(sum_th2[l] / (n + 1))
-            res[r, R_MAX_UC], res[r, R_MAX_F], res[r, R_LIMIT] = muc[l], mf[l], lim_t[l]
+            res[r, R_MAX_TH], res[r, R_MAX_S] = fig[F_MAX_TH, l], fig[F_MAX_S, l]
+            res[r, R_RMS_TH] = math.sqrt(fig[F_SUM_TH2, l] / (n + 1))
+            res[r, R_MAX_UC], res[r, R_MAX_F], res[r, R_LIMIT] = fig[F_MAX_UC, l], fig[F_MAX_F, l], fig[F_LIMIT, l]
             for i in range(N_STATES):
                 res[r, R_FINAL + i] = xp[i, l]
             alive[l] = False
@@ -391,14 +404,14 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
 
 
 @nb.njit(**_JIT)
-def _record(out, r, l, t, xp, s_ref, sig, out_index, forces, ns):
+def _record(out, r, l, t, xp, s_ref, sig, out_index, kx, ns):
     """One history sample of run r (lane l): the HISTORY_CHANNELS, then the amplifier outputs."""
     hist = out.history
     k = out.history_length[r]
     hist[r, k, H_T] = t
     for i in range(N_STATES):
         hist[r, k, H_STATE + i] = xp[i, l]
-    hist[r, k, H_S_REF], hist[r, k, H_U_C], hist[r, k, H_FORCE] = s_ref, sig[out_index, l], forces[0, l]
+    hist[r, k, H_S_REF], hist[r, k, H_U_C], hist[r, k, H_FORCE] = s_ref, sig[out_index, l], kx[0, KX_FORCE, l]
     for j in range(hist.shape[2] - H_AMPS):
         hist[r, k, H_AMPS + j] = sig[ns + j, l]
     out.history_length[r] = k + 1

@@ -25,28 +25,62 @@ N_ACTUATOR = len(ACTUATOR_VECTOR)
 A_INV_TAU, A_KU_TAU = N_ACTUATOR, N_ACTUATOR + 1  # rows actuator_rates adds: 1 / tau, K_U / tau
 N_ACTUATOR_ROWS = N_ACTUATOR + 2
 S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
+KX_RATE, KX_FORCE, KX_LIMITED = range(3)  # drive's rows per stage: the actuator's slope, its force,
+KX_ROWS = 3  # and whether its command is at the limit
 FILTER_ROWS = 2  # a sensor filter's states (y, y'): at most one filter, the velocity's
+TERMS = 4  # an amplifier's inputs summed per pass over the lanes (input_groups)
 _JIT = {"cache": True, "error_model": "numpy"}  # as patchgen.bench.kernel's
 
 
+def input_groups(in_ptr: np.ndarray, in_src: np.ndarray, in_gain: np.ndarray,
+                 zero_row: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each amplifier's inputs as the circuit loop sums them: groups of TERMS (source signal,
+    gain), padded with the zero signal at gain 0, at least one group per amplifier.
+
+    Returns (group_ptr, group_src, group_gain): amplifier j's groups are rows group_ptr[j] to
+    group_ptr[j + 1] - 1 of group_src and group_gain, (groups, TERMS). A sum of the padded
+    terms is the sum of the inputs to the bit: it starts at +0.0, so it is never -0.0, and adding
+    0.0 * 0.0 = +0.0 to anything but -0.0 leaves it as it is.
+    """
+    ptr, src, gain = [0], [], []
+    for j in range(len(in_ptr) - 1):
+        s, g = list(in_src[in_ptr[j]:in_ptr[j + 1]]), list(in_gain[in_ptr[j]:in_ptr[j + 1]])
+        n = max(1, -(-len(s) // TERMS))
+        s += [zero_row] * (n * TERMS - len(s))
+        g += [0.0] * (n * TERMS - len(g))
+        src += [s[k:k + TERMS] for k in range(0, len(s), TERMS)]
+        gain += [g[k:k + TERMS] for k in range(0, len(g), TERMS)]
+        ptr.append(ptr[-1] + n)
+    return (np.array(ptr, dtype=np.int64), np.array(src, dtype=np.int64).reshape(-1, TERMS),
+            np.array(gain, dtype=np.float64).reshape(-1, TERMS))
+
+
 @nb.njit(inline="always", **_JIT)
-def _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc):
-    """acc[0, lane] = 0 + amplifier j's inputs times their gains but the last. Returns the row
-    of acc holding that sum (row 1 is zeros: at most one input) and the last input's signal and
-    gain, for the caller to add in its own loop over lanes (a pass fewer). Without inputs: the
-    zero row at the end of sig, gain 0."""
-    lo, hi = in_ptr[j], in_ptr[j + 1] - 1
-    if hi < lo:
-        return 1, sig.shape[0] - 1, 0.0
+def _group(wiring, k):
+    """Group k's sources and gains (input_groups), read once before a loop over lanes."""
+    src, gain = wiring.group_src, wiring.group_gain
+    return src[k, 0], src[k, 1], src[k, 2], src[k, 3], gain[k, 0], gain[k, 1], gain[k, 2], gain[k, 3]
+
+
+@nb.njit(inline="always", **_JIT)
+def _add(start, sig, l, s0, s1, s2, s3, g0, g1, g2, g3):
+    """start + a group's four terms, in order, at lane l."""
+    return (((start + g0 * sig[s0, l]) + g1 * sig[s1, l]) + g2 * sig[s2, l]) + g3 * sig[s3, l]
+
+
+@nb.njit(inline="always", **_JIT)
+def _partial(j, wiring, sig, acc):
+    """The sum of amplifier j's input groups but the last into acc[0]; returns the row of acc the
+    last group adds to (1, the zero row, when there is one group) and that group's index. A
+    loop's sources and gains are locals, read before it: loaded from arrays inside it, they
+    would be read again for every lane, as a store to sig might have changed them."""
+    lo, hi = wiring.group_ptr[j], wiring.group_ptr[j + 1] - 1
     for k in range(lo, hi):
-        g, src = in_gain[k], in_src[k]
-        if k == lo:
-            for l in range(acc.shape[1]):
-                acc[0, l] = 0.0 + g * sig[src, l]
-        else:
-            for l in range(acc.shape[1]):
-                acc[0, l] += g * sig[src, l]
-    return (0 if hi > lo else 1), in_src[hi], in_gain[hi]
+        s0, s1, s2, s3, g0, g1, g2, g3 = _group(wiring, k)
+        b = 1 if k == lo else 0
+        for l in range(acc.shape[1]):
+            acc[0, l] = _add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3)
+    return (0 if hi > lo else 1), hi
 
 
 @nb.njit(inline="always", **_JIT)
@@ -82,7 +116,7 @@ def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip,
     sensors: patchgen.bench.kernel's Sensors (a sensor reads its plant state, quantised, or its
     filter's output in XF); wiring: patchgen.bench.kernel's Wiring; X, Z, XF, nz, drift and
     sensor_gain (sensor, lane) are per lane."""
-    amp_kind, in_ptr, in_src, in_gain = wiring.kind, wiring.in_ptr, wiring.in_src, wiring.in_gain
+    amp_kind = wiring.kind
     param1, param2 = wiring.param1, wiring.param2
     ns = sensors.state.shape[0]
     nl = acc.shape[1]
@@ -100,7 +134,9 @@ def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip,
         else:
             for l in range(nl):
                 sig[i, l] = sensor_gain[i, l] * (d * math.floor(X[q, l] / d + 0.5) - ref) + nz[i, l]
-    # outputs in evaluation order (integrators and lags, whose outputs are their states, first)
+    # outputs in evaluation order (integrators and lags, whose outputs are their states, first);
+    # each amplifier a loop over lanes or two, its inputs summed inside (at most a pass more per
+    # TERMS inputs), each loop storing into few arrays so that LLVM vectorises it
     for j in range(amp_kind.shape[0]):
         kd, a = amp_kind[j], ns + j
         if kd == INTEGRATOR or kd == LAG:
@@ -109,32 +145,35 @@ def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip,
                 raw[j, l] = v
                 sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
             continue
-        b, src, g = _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc)
+        b, k = _partial(j, wiring, sig, acc)
+        s0, s1, s2, s3, g0, g1, g2, g3 = _group(wiring, k)
         if kd == SUMMER:
             for l in range(nl):
-                v = -(acc[b, l] + g * sig[src, l]) + nz[a, l]
+                v = -_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) + nz[a, l]
                 raw[j, l] = v
                 sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
-        else:  # DIFFERENTIATOR with roll-off
+        else:  # DIFFERENTIATOR with roll-off: its state's slope, then its output
             p1, p2 = param1[j], param2[j]
             for l in range(nl):
-                e = acc[b, l] + g * sig[src, l] - Z[j, l]
-                v = -p1 * e + nz[a, l]
+                dz[st, j, l] = p2 * (_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) - Z[j, l])
+            for l in range(nl):
+                v = -p1 * (_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) - Z[j, l]) + nz[a, l]
                 raw[j, l] = v
                 sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
-                dz[st, j, l] = p2 * e
     # last, the integrating amplifiers' inputs, now that every signal of this instant is known
     for j in range(amp_kind.shape[0]):
         kd = amp_kind[j]
         if kd == INTEGRATOR or kd == LAG:
-            b, src, g = _sum_but_last(j, in_ptr, in_src, in_gain, sig, acc)
+            b, k = _partial(j, wiring, sig, acc)
+            s0, s1, s2, s3, g0, g1, g2, g3 = _group(wiring, k)
             p1 = param1[j]
             if kd == INTEGRATOR:
                 for l in range(nl):
-                    dz[st, j, l] = -p1 * (acc[b, l] + g * sig[src, l]) + drift[j, l]
+                    dz[st, j, l] = -p1 * _add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) + drift[j, l]
             else:
                 for l in range(nl):
-                    dz[st, j, l] = p1 * (-(acc[b, l] + g * sig[src, l]) - Z[j, l]) + drift[j, l]
+                    x = _add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3)
+                    dz[st, j, l] = p1 * (-x - Z[j, l]) + drift[j, l]
 
 
 @nb.njit(**_JIT)
@@ -146,11 +185,32 @@ def actuator_rates(ap):
         ap[A_KU_TAU, l] = ap[A_K_U, l] / ap[A_TAU, l]
 
 
+@nb.njit(inline="always", **_JIT)
+def _dead(u, dz):
+    """A command u through a dead zone of half-width dz."""
+    return u - dz if u > dz else (u + dz if u < -dz else 0.0)
+
+
+@nb.njit(inline="always", **_JIT)
+def _limit(force, flim):
+    """(force clipped to +/- flim, whether it reached the limit)."""
+    return (flim if force > flim else (-flim if force < -flim else force)), (force >= flim) | (force <= -flim)
+
+
+@nb.njit(inline="always", **_JIT)
+def _store(kx, st, l, rate, force, limited, tripped):
+    """Lane l's actuator at stage st into kx (KX_ROWS): a tripped run's motor is cut."""
+    kx[st, KX_RATE, l] = rate
+    kx[st, KX_FORCE, l] = 0.0 if tripped else force
+    kx[st, KX_LIMITED, l] = 1.0 if limited else 0.0
+
+
 @nb.njit(**_JIT)
-def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx, forces, at_limit, st):
+def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx, st):
     """Actuator (dead zone, model, force limit; off once tripped) and plant slopes per lane,
-    into kp[st], kx[st], forces[st], and at stage 0 whether the command sits at the actuator's
-    limit into at_limit. act: the actuator's model ACT_*; ap (N_ACTUATOR_ROWS, lane): each lane's
+    into kp[st] and kx[st] (KX_ROWS: the actuator state's slope, the force, and 1.0 where the
+    command sits at the actuator's limit, else 0.0). act: the actuator's model ACT_*;
+    ap (N_ACTUATOR_ROWS, lane): each lane's
     K_U, tau, dead zone, force limit, back-EMF, then 1 / tau and K_U / tau (actuator_rates); a
     motor's command K_U v is limited at the amplifier (force limit = a V_limit), then the back-EMF
     takes b s_dot from it, through the electrical lag tau when it has one;
@@ -159,37 +219,36 @@ def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx
     the cart and at the tip (N), per lane."""
     fc, ft = nz.shape[0] - 2, nz.shape[0] - 1
     # Two lane loops, not one: the actuator's branches and the plant's trigonometry in one
-    # body keep LLVM from vectorising either; split, both run on whole SIMD registers.
-    for l in range(XA.shape[0]):
-        K_U, dz, flim = ap[A_K_U, l], ap[A_DEAD_ZONE, l], ap[A_FORCE_LIMIT, l]
-        inv_tau, ku_tau = ap[A_INV_TAU, l], ap[A_KU_TAU, l]
-        u = sig[out_index, l]
-        v = u - dz if u > dz else (u + dz if u < -dz else 0.0)
-        xa = XA[l]
-        if act == ACT_MOTOR:
-            cmd = K_U * v
-            limited = (cmd >= flim) | (cmd <= -flim)
-            cmd = flim if cmd > flim else (-flim if cmd < -flim else cmd)
+    # body keep LLVM from vectorising either; split, both run on whole SIMD registers. Each
+    # stores into one array (kx, kp): a store more, and LLVM can no longer prove the arrays
+    # apart and runs the loop a lane at a time.
+    if act == ACT_MOTOR:  # a loop per model: the model's branch outside, nothing left in the loop
+        for l in range(XA.shape[0]):
+            cmd = ap[A_K_U, l] * _dead(sig[out_index, l], ap[A_DEAD_ZONE, l])
+            cmd, limited = _limit(cmd, ap[A_FORCE_LIMIT, l])
             net = cmd - ap[A_BACK_EMF, l] * X[2, l]
+            xa = XA[l]
             lagged = ap[A_TAU, l] > 0.0
-            force, dx = (xa, (net - xa) * inv_tau) if lagged else (net, 0.0)
-        else:
-            if act == ACT_GAIN:
-                force, dx = K_U * v, 0.0
-            elif act == ACT_LAG:
-                force, dx = xa, (K_U * v - xa) * inv_tau
-            else:
-                force, dx = ku_tau * (v - xa), (v - xa) * inv_tau
-            limited = (force >= flim) | (force <= -flim)
-            force = flim if force > flim else (-flim if force < -flim else force)
-        if st == 0:
-            at_limit[l] = limited
-        kx[st, l] = dx
-        forces[st, l] = 0.0 if tripped[l] else force
+            force = xa if lagged else net
+            _store(kx, st, l, (net - xa) * ap[A_INV_TAU, l] if lagged else 0.0, force, limited, tripped[l])
+    elif act == ACT_GAIN:
+        for l in range(XA.shape[0]):
+            force, limited = _limit(ap[A_K_U, l] * _dead(sig[out_index, l], ap[A_DEAD_ZONE, l]), ap[A_FORCE_LIMIT, l])
+            _store(kx, st, l, 0.0, force, limited, tripped[l])
+    elif act == ACT_LAG:
+        for l in range(XA.shape[0]):
+            v, xa = _dead(sig[out_index, l], ap[A_DEAD_ZONE, l]), XA[l]
+            force, limited = _limit(xa, ap[A_FORCE_LIMIT, l])
+            _store(kx, st, l, (ap[A_K_U, l] * v - xa) * ap[A_INV_TAU, l], force, limited, tripped[l])
+    else:
+        for l in range(XA.shape[0]):
+            v, xa = _dead(sig[out_index, l], ap[A_DEAD_ZONE, l]), XA[l]
+            force, limited = _limit(ap[A_KU_TAU, l] * (v - xa), ap[A_FORCE_LIMIT, l])
+            _store(kx, st, l, (v - xa) * ap[A_INV_TAU, l], force, limited, tripped[l])
     for l in range(XA.shape[0]):
         sd, thd = X[2, l], X[3, l]
         sn, cs = sincos(X[1, l])
-        sdd, thdd = plant_accel(pc, l, sn, cs, sd, thd, forces[st, l] + (f_cart + nz[fc, l]),
+        sdd, thdd = plant_accel(pc, l, sn, cs, sd, thd, kx[st, KX_FORCE, l] + (f_cart + nz[fc, l]),
                                 f_tip + nz[ft, l])
         kp[st, 0, l] = sd
         kp[st, 1, l] = thd

@@ -4,6 +4,7 @@ but its own draws (not its block, its place in it, the threads)."""
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import importlib
 import math
@@ -22,6 +23,7 @@ from patchgen.bench import kernel
 from patchgen.bench.circuit import compile_circuit
 from patchgen.bench.configure import engine_config
 from patchgen.bench.engine import draw_batch, run_batch
+from patchgen.bench.lanes import TERMS, input_groups
 from patchgen.bench.noise import ZIGGURAT_EDGES, philox, run_normals
 from patchgen.design.model import plant_params
 from patchgen.inputs.scenario import Scenario, load_scenario
@@ -189,3 +191,33 @@ def test_compile_notice_only_when_numba_will_compile(tmp_path):
     runs = [subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env,
                            check=True).stdout.split() for _ in range(2)]
     assert runs == [["True", "False"], ["False", "False"]]
+
+
+def test_input_groups_pad_with_the_zero_signal():
+    """Groups of TERMS in order, padded at gain 0 from the zero row; an unwired amplifier gets one."""
+    ptr, src, gain = input_groups(np.array([0, 6, 6, 7]), np.arange(7), np.arange(1.0, 8.0), zero_row=99)
+    assert ptr.tolist() == [0, 2, 3, 4]
+    assert src.tolist() == [[0, 1, 2, 3], [4, 5, 99, 99], [99] * TERMS, [6, 99, 99, 99]]
+    assert gain.tolist() == [[1, 2, 3, 4], [5, 6, 0, 0], [0] * TERMS, [7, 0, 0, 0]]
+
+
+def test_an_amplifier_with_more_inputs_than_a_pass_sums():
+    """A summer of TERMS + 2 inputs (bench-recommended's cart and pendulum summer, each input split
+    in two halves) runs as the per-run loop runs it, and as the patch it stands for does."""
+    cfg = _config("bench-recommended", "step-cart", duration=3.0)
+    w = cfg.wiring
+    j = int(np.argmax(np.diff(w.in_ptr)))  # the summer with the most inputs (3)
+    lo, hi = w.in_ptr[j], w.in_ptr[j + 1]
+    src = np.concatenate([w.in_src[:lo], np.repeat(w.in_src[lo:hi], 2), w.in_src[hi:]])
+    gain = np.concatenate([w.in_gain[:lo], np.repeat(w.in_gain[lo:hi] / 2, 2), w.in_gain[hi:]])
+    ptr = w.in_ptr + np.where(np.arange(len(w.in_ptr)) > j, hi - lo, 0)
+    assert ptr[j + 1] - ptr[j] > TERMS
+    zero = len(cfg.noise.a)
+    split = dataclasses.replace(cfg, wiring=w._replace(in_ptr=ptr, in_src=src, in_gain=gain,
+                                                       **dict(zip(("group_ptr", "group_src", "group_gain"),
+                                                                  input_groups(ptr, src, gain, zero)))))
+    draws = draw_batch(split, [np.random.default_rng([5, i]) for i in range(20)])
+    new, ref, whole = run_batch(split, draws, 1), reference_runs(split, draws), run_batch(cfg, draws, 1)
+    for name in FIELDS:
+        np.testing.assert_allclose(getattr(new, name), ref[name], rtol=1e-9, atol=1e-9, err_msg=name)
+        np.testing.assert_allclose(getattr(new, name), getattr(whole, name), rtol=1e-6, atol=1e-9, err_msg=name)

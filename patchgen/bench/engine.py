@@ -52,6 +52,7 @@ from patchgen.plant.compiled import PLANT_VECTOR
 BENCH_DT_S = 0.002
 IDEAL_DT_S = 0.01
 STEPS_PER_TIME_CONSTANT = 1.0
+SPLIT_FROM = 32  # the fewest runs of a block split off to use another thread (plan_blocks)
 COMPILE_NOTICE = "compiling simulation kernels (first run after installation; cached for later runs)..."
 
 
@@ -188,12 +189,12 @@ def draw_batch(cfg: EngineConfig, rngs: list[np.random.Generator]) -> Draws:
 
 
 def run_batch(cfg: EngineConfig, draws: Draws, n_history: int) -> BatchOutput:
-    """One run per row of ``draws``, in blocks of LANES runs side by side.
+    """One run per row of ``draws``, in blocks of at most LANES runs side by side.
 
-    The blocks run in parallel threads (run_block releases the GIL; numba.get_num_threads() of
-    them, the cores by default); a batch of one block runs in this thread (a thread launch costs
-    more than the block on a busy machine). Threads of Python, not a numba parallel
-    loop: that loop would be a second compilation of the whole kernel (about 9 s on a first run).
+    The blocks (plan_blocks) run in parallel threads (run_block releases the GIL;
+    numba.get_num_threads() of them, the cores by default); a batch of one block runs in this
+    thread (a thread launch costs more than the block on a busy machine). Threads of Python,
+    not a numba parallel loop: that loop would be a second compilation of the whole kernel (about 9 s on a first run).
 
     Parameters
     ----------
@@ -219,7 +220,7 @@ def run_batch(cfg: EngineConfig, draws: Draws, n_history: int) -> BatchOutput:
                   history_length=np.zeros(n_history, dtype=np.int64))
     args = (draws, *cfg.records, out)
     _notice_if_compiling(kernel.run_block, (0, min(runs, LANES)) + args)
-    blocks = [(lo, min(LANES, runs - lo)) for lo in range(0, runs, LANES)]
+    blocks = plan_blocks(runs, nb.get_num_threads())
     if len(blocks) == 1:
         kernel.run_block(*blocks[0], *args)
     else:  # the blocks write disjoint rows of out and release the GIL
@@ -231,6 +232,20 @@ def run_batch(cfg: EngineConfig, draws: Draws, n_history: int) -> BatchOutput:
         final_state=results[:, R_FINAL:R_FINAL + N_STATES], overload_first=out.overload_first,
         overload_time=out.overload_time, history=out.history, history_length=out.history_length,
     )
+
+
+def plan_blocks(runs: int, threads: int) -> list[tuple[int, int]]:
+    """(first run, runs) of each block: at most LANES runs each, as even as they come, and a
+    multiple of ``threads`` blocks when every block still holds SPLIT_FROM runs (two blocks of
+    64 run side by side in about the time of one of 32 lanes; a block of fewer runs pays the
+    per-step work that is not per lane for little: it runs alone). A run's result does not
+    depend on its block (patchgen.bench.kernel)."""
+    n = -(-runs // LANES)
+    if threads > 1 and n % threads:
+        more = -(-n // threads) * threads
+        n = more if runs >= more * SPLIT_FROM else n
+    size = -(-runs // n)
+    return [(lo, min(size, runs - lo)) for lo in range(0, runs, size)]
 
 
 def will_compile(dispatcher, args: tuple) -> bool:

@@ -7,10 +7,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from patchgen.bench.circuit import compile_circuit
 from patchgen.bench.configure import engine_config
-from patchgen.bench.engine import default_step, noise_process
+from patchgen.bench.engine import LANES, SPLIT_FROM, default_step, noise_process, plan_blocks
 from patchgen.bench.simulate import simulate
 from patchgen.inputs.scenario import Scenario, load_scenario
 from patchgen.patch.netlist import read_netlist
@@ -80,3 +82,18 @@ def test_default_step_resolves_the_fastest_time_constant():
     assert default_step([], ideal=False) == 0.002
     assert default_step([], ideal=True) == 0.01
     assert default_step([0.001, 0.2], ideal=True) == 0.001
+
+
+@settings(max_examples=300, deadline=None)
+@given(runs=st.integers(1, 5000), threads=st.integers(1, 8))
+def test_blocks_cover_the_runs_evenly_and_fill_the_threads(runs, threads):
+    """Every run in exactly one block, in order; at most LANES a block, sizes within one of each
+    other but the last; a multiple of the threads whenever each block still holds SPLIT_FROM."""
+    blocks = plan_blocks(runs, threads)
+    assert [lo for lo, _ in blocks] == list(np.cumsum([0] + [n for _, n in blocks[:-1]]))
+    sizes = [n for _, n in blocks]
+    assert sum(sizes) == runs and max(sizes) <= LANES and min(sizes) >= 1
+    assert len(set(sizes[:-1])) <= 1 and sizes[-1] <= sizes[0]
+    fewest = -(-runs // LANES)
+    whole = -(-fewest // threads) * threads
+    assert len(blocks) == (whole if runs >= whole * SPLIT_FROM else fewest)

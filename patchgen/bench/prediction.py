@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+
+import numba
 
 from patchgen.bench.simulate import RunSummary, simulate
 from patchgen.inputs.scenario import load_scenario
@@ -33,7 +36,8 @@ class Prediction:
 def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
             runs_hold: int = 20, scenarios: tuple[str, ...] | None = None,
             done: dict[str, list[RunSummary]] | None = None, bench_spread: bool = False) -> list[Prediction]:
-    """Each standard scenario on the bench (noise and drift as the profiles say).
+    """Each standard scenario on the bench (noise and drift as the profiles say), side by side
+    on the cores (the engine releases the interpreter).
 
     The long hold is a small Monte Carlo over noise seeds, the others one run at their own seed.
 
@@ -57,8 +61,7 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
     list of Prediction
         One per scenario, in order.
     """
-    out = []
-    for given in scenarios or bench_scenarios(bench):
+    def one(given: str) -> Prediction:
         sc = load_scenario(given)
         name = sc.name  # a file's stem, or the name it gives itself
         runs = runs_hold if name == "hold-120s" else 1
@@ -69,7 +72,13 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
                                  bench_spread=bench_spread).runs
         r0 = summaries[0]
         ovl = sorted({o.amplifier for run in summaries for o in run.overloads})
-        out.append(Prediction(name, sc.description, runs, sum(r.held for r in summaries) / runs, r0.trip_time_s,
-                              r0.fall_time_s, max(x.max_abs_theta_deg for x in summaries),
-                              max(x.max_abs_s_m for x in summaries), ", ".join(ovl) or "none"))
-    return out
+        return Prediction(name, sc.description, runs, sum(r.held for r in summaries) / runs, r0.trip_time_s,
+                          r0.fall_time_s, max(x.max_abs_theta_deg for x in summaries),
+                          max(x.max_abs_s_m for x in summaries), ", ".join(ovl) or "none")
+
+    given = list(scenarios or bench_scenarios(bench))
+    # side by side, the long hold first, so that the short scenarios fill the other cores
+    order = sorted(range(len(given)), key=lambda i: load_scenario(given[i]).name != "hold-120s")
+    with ThreadPoolExecutor(max(1, min(len(given), numba.get_num_threads()))) as pool:
+        futures = {i: pool.submit(one, given[i]) for i in order}
+        return [futures[i].result() for i in range(len(given))]

@@ -81,3 +81,16 @@ def test_sweep_gives_the_wired_loops_bench_verdict():
     rows = sweep(spec, load_machine("gp6"), ["M"], 0.1, workers=1, scenario=load_scenario("offset-10deg"), runs=1,
                  bench=load_bench("uw-1991"))
     assert [r.outcome["bench_loop"] for r in rows] == ["unstable"] * 4
+
+
+def test_a_sweep_on_every_core_is_the_sweep_on_one():
+    """The rows spread over two processes are the rows computed one after another, outcome and all."""
+    from patchgen.inputs.scenario import load_scenario
+    from patchgen.profiles.bench import load_bench
+
+    spec = load_spec(design_path("bench-recommended"))
+    args = (spec, load_machine("gp6"), ["M", "l"], 0.1)
+    kw = {"scenario": load_scenario("step-cart"), "runs": 3, "bench": load_bench("uw-1991")}
+    one, two = sweep(*args, workers=1, **kw), sweep(*args, workers=2, **kw)
+    assert len(two) >= 4 and [r.as_dict() for r in two] == [r.as_dict() for r in one]
+    assert all(r.outcome is not None and r.outcome["runs"] == 3 for r in one)

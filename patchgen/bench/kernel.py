@@ -37,11 +37,6 @@ import numpy as np
 
 from patchgen.bench.circuit import DIFFERENTIATOR
 from patchgen.bench.lanes import (
-    FILTER_ROWS,
-    KX_FORCE,
-    KX_LIMITED,
-    KX_RATE,
-    KX_ROWS,
     N_ACTUATOR,
     N_ACTUATOR_ROWS,
     actuator_rates,
@@ -49,13 +44,14 @@ from patchgen.bench.lanes import (
     drive,
     quantised,
     sensor_filters,
+    state_rows,
 )
 from patchgen.bench.noise import WORDS, fill_normals
 from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "117252e78f65ff11"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_IN = "f02fcd4b96b19a76"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 128  # runs per block (fewer, and the per-step work that is not per lane weighs more)
 PAD = 16  # a block computes a multiple of this many lanes: four AVX2 registers of four lanes
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
@@ -196,11 +192,15 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     k0 = np.empty(nl, dtype=np.uint64)
     k1 = np.empty(nl, dtype=np.uint64)
     drift = np.empty((na, nl))  # each integrating amplifier drifts one way, drawn per run
-    xp = np.empty((N_STATES, nl))
-    za = np.empty((na, nl))
-    xf = np.zeros((FILTER_ROWS, nl))  # the velocity filter's states (zero when the bench has none)
-    kf = np.zeros((4, FILTER_ROWS, nl))
-    xft = np.zeros((FILTER_ROWS, nl))
+    ra, rx, rf, r_force, r_limit, n_int = state_rows(na)
+    # the integrated states, rows of one array, and each RK4 stage's (patchgen.bench.lanes.state_rows)
+    state, staged = np.zeros((n_int, nl)), np.zeros((n_int, nl))
+    xp, za, xa, xf = state[:ra], state[ra:rx], state[rx], state[rf:r_force]  # xf: the velocity filter's
+    xt, zt, xat, xft = staged[:ra], staged[ra:rx], staged[rx], staged[rf:r_force]
+    K = np.zeros((4, r_limit + 1, nl))  # each stage's slopes, then the actuator's force and at-limit
+    flat, flat_staged, flat_K = state.reshape(n_int * nl), staged.reshape(n_int * nl), K.reshape((4, K[0].size))
+    act_rows = (rx, r_force, r_limit)
+    force, at_limit = K[0, r_force], K[0, r_limit]  # at the step's start: recorded and summarised
     over = np.empty((2, na, nl))  # each lane's overloads (first time, time), copied out at its end
     for l in range(nl):
         r = lo + min(l, nr - 1)  # a lane past the block's runs computes its last run again
@@ -237,19 +237,12 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
                 nz[c, l] = z[c, l] * nstd[c, l] / math.sqrt(1.0 - noise.a[c] * noise.a[c])
     sig = np.zeros((nch + 1, nl))  # signals, and a row of zeros (the input of an unwired amplifier)
     raw = np.zeros((na, nl))
-    kp = np.zeros((4, N_STATES, nl))  # RK4 slopes of the plant, amplifier and actuator states
-    ka = np.zeros((4, na, nl))
-    kx = np.zeros((4, KX_ROWS, nl))  # the actuator's slope, force and limit (see drive)
     acc = np.zeros((2, nl))  # a partial sum of inputs, and zeros
-    xt = np.empty((N_STATES, nl))
-    zt = np.empty((na, nl))
-    xa = np.zeros(nl)
-    xat = np.empty(nl)
     # a differentiator starts settled on its input (the angle was held before the run): set its
     # filter state to its input, in evaluation order (one pass per amplifier reaches every chain)
     quiet = np.zeros((nch, nl))
     for _ in range(na):
-        circuit(xp, za, xf, 0.0, quiet, sensors, gain, wiring, drift, sat, np.bool_(False), sig, raw, ka,
+        circuit(xp, za, xf, 0.0, quiet, sensors, gain, wiring, drift, sat, np.bool_(False), sig, raw, K, ra,
                 np.int64(0), acc)  # typed, not literals: one compilation of the circuit
         for j in range(na):
             if wiring.kind[j] == DIFFERENTIATOR:
@@ -272,39 +265,31 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
                     nz[c, l] = a * nz[c, l] + nstd[c, l] * z[c, l]
         f_cart, f_tip, s_ref = _disturbances(disturbances, t, h)
         for st in range(4):  # stage 0 reads the step's start itself, the others their own states
-            if st > 0:
-                _stage_state(st, h, xp, za, xa, xf, kp, ka, kx, kf, xt, zt, xat, xft)
+            if st > 0:  # the step's start + c * the last stage's slopes, every state in one loop
+                c = h if st == 3 else 0.5 * h
+                for i in range(flat.shape[0]):
+                    flat_staged[i] = flat[i] + c * flat_K[st - 1, i]
             X, Z, XA, XF = (xp, za, xa, xf) if st == 0 else (xt, zt, xat, xft)
-            sensor_filters(X, XF, sensors, kf, st)
-            circuit(X, Z, XF, s_ref, nz, sensors, gain, wiring, drift, sat, clip, sig, raw, ka, st, acc)
-            drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, kp, kx, st)
+            sensor_filters(X, XF, sensors, K, rf, st)
+            circuit(X, Z, XF, s_ref, nz, sensors, gain, wiring, drift, sat, clip, sig, raw, K, ra, st, acc)
+            drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, K, act_rows, st)
             if st == 0:  # record and summarise time t; a run ends at the scenario's end or at a trip
                 for l in range(n_hist):
                     if alive[l] and (n % stride == 0 or n == n_steps or tripped[l]):
-                        _record(out, lo + l, l, t, xp, s_ref, sig, out_index, kx, ns)
+                        _record(out, lo + l, l, t, xp, s_ref, sig, out_index, force, ns)
                 n_alive -= _summaries(n, t, n == n_steps, lo, alive, tripped, fallen, xp, raw, pinned,
-                                      sig, out_index, kx, settings, fig, over, out)
+                                      sig, out_index, force, at_limit, settings, fig, over, out)
         if n_alive == 0:
             break
-        for i in range(N_STATES):  # the plant's (a sensor filter's states advance in sensor_filters)
-            for l in range(nl):
-                xp[i, l] += h / 6.0 * (kp[0, i, l] + 2.0 * kp[1, i, l] + 2.0 * kp[2, i, l] + kp[3, i, l])
-        for j in range(na):  # a loop per case, without branches, so that each vectorises
-            if clip and wiring.kind[j] != DIFFERENTIATOR:  # a capacitor cannot charge past the rails
-                for l in range(nl):
-                    v = za[j, l] + h / 6.0 * (ka[0, j, l] + 2.0 * ka[1, j, l] + 2.0 * ka[2, j, l] + ka[3, j, l])
-                    pinned[j, l] = (v > sat) | (v < -sat)
-                    za[j, l] = sat if v > sat else (-sat if v < -sat else v)
-            else:
-                for l in range(nl):
-                    za[j, l] = za[j, l] + h / 6.0 * (ka[0, j, l] + 2.0 * ka[1, j, l] + 2.0 * ka[2, j, l] + ka[3, j, l])
-                    pinned[j, l] = False
-        for l in range(nl):
-            xa[l] += h / 6.0 * (kx[0, KX_RATE, l] + 2.0 * kx[1, KX_RATE, l] + 2.0 * kx[2, KX_RATE, l]
-                                + kx[3, KX_RATE, l])
-        for i in range(FILTER_ROWS):
-            for l in range(nl):
-                xf[i, l] += h / 6.0 * (kf[0, i, l] + 2.0 * kf[1, i, l] + 2.0 * kf[2, i, l] + kf[3, i, l])
+        for i in range(flat.shape[0]):  # every state's RK4 step, in one loop
+            flat[i] += h / 6.0 * (flat_K[0, i] + 2.0 * flat_K[1, i] + 2.0 * flat_K[2, i] + flat_K[3, i])
+        if clip:  # then the rails: a capacitor cannot charge past them
+            for j in range(na):
+                if wiring.kind[j] != DIFFERENTIATOR:
+                    for l in range(nl):
+                        v = za[j, l]
+                        pinned[j, l] = (v > sat) | (v < -sat)
+                        za[j, l] = sat if v > sat else (-sat if v < -sat else v)
         trips = 0
         for l in range(nl):
             trips += alive[l] & (not tripped[l]) & (abs(xp[S, l]) >= half[l])
@@ -336,25 +321,7 @@ def _disturbances(dist, t, h):
 
 
 @nb.njit(**_JIT)
-def _stage_state(st, h, xp, za, xa, xf, kp, ka, kx, kf, xt, zt, xat, xft):
-    """The states at RK4 stage st > 0: the step's start + c * the last stage's slopes."""
-    nl = xa.shape[0]
-    c = h if st == 3 else 0.5 * h
-    for i in range(4):  # the plant's (a sensor filter's are sensor_filters')
-        for l in range(nl):
-            xt[i, l] = xp[i, l] + c * kp[st - 1, i, l]
-    for j in range(za.shape[0]):
-        for l in range(nl):
-            zt[j, l] = za[j, l] + c * ka[st - 1, j, l]
-    for l in range(nl):
-        xat[l] = xa[l] + c * kx[st - 1, KX_RATE, l]
-    for i in range(FILTER_ROWS):
-        for l in range(nl):
-            xft[i, l] = xf[i, l] + c * kf[st - 1, i, l]
-
-
-@nb.njit(**_JIT)
-def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_index, kx,
+def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_index, force, at_lim,
                settings, fig, over, out):
     """Figures at time t of the lanes still running; the results of those whose run ends here.
     Returns how many ended. The running figures are updated in every lane (an ended lane's are
@@ -366,13 +333,13 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
     nl = alive.shape[0]
     events = 0
     for l in range(nl):
-        th, s, u, f = abs(xp[THETA, l]), abs(xp[S, l]), abs(sig[out_index, l]), abs(kx[0, KX_FORCE, l])
+        th, s, u, f = abs(xp[THETA, l]), abs(xp[S, l]), abs(sig[out_index, l]), abs(force[l])
         fig[F_SUM_TH2, l] += xp[THETA, l] * xp[THETA, l]
         fig[F_MAX_TH, l] = th if th > fig[F_MAX_TH, l] else fig[F_MAX_TH, l]
         fig[F_MAX_S, l] = s if s > fig[F_MAX_S, l] else fig[F_MAX_S, l]
         fig[F_MAX_UC, l] = u if u > fig[F_MAX_UC, l] else fig[F_MAX_UC, l]
         fig[F_MAX_F, l] = f if f > fig[F_MAX_F, l] else fig[F_MAX_F, l]
-        at_limit = (kx[0, KX_LIMITED, l] != 0.0) & (not (end | tripped[l]))
+        at_limit = (at_lim[l] != 0.0) & (not (end | tripped[l]))
         fig[F_LIMIT, l] = fig[F_LIMIT, l] + h if at_limit else fig[F_LIMIT, l]
     for l in range(nl):  # apart: a loop storing into one array (fig) vectorises
         events += alive[l] & (tripped[l] | ((abs(xp[THETA, l]) > fall) & (not fallen[l])))
@@ -411,14 +378,14 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
 
 
 @nb.njit(**_JIT)
-def _record(out, r, l, t, xp, s_ref, sig, out_index, kx, ns):
+def _record(out, r, l, t, xp, s_ref, sig, out_index, force, ns):
     """One history sample of run r (lane l): the HISTORY_CHANNELS, then the amplifier outputs."""
     hist = out.history
     k = out.history_length[r]
     hist[r, k, H_T] = t
     for i in range(N_STATES):
         hist[r, k, H_STATE + i] = xp[i, l]
-    hist[r, k, H_S_REF], hist[r, k, H_U_C], hist[r, k, H_FORCE] = s_ref, sig[out_index, l], kx[0, KX_FORCE, l]
+    hist[r, k, H_S_REF], hist[r, k, H_U_C], hist[r, k, H_FORCE] = s_ref, sig[out_index, l], force[l]
     for j in range(hist.shape[2] - H_AMPS):
         hist[r, k, H_AMPS + j] = sig[ns + j, l]
     out.history_length[r] = k + 1

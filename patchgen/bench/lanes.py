@@ -25,10 +25,12 @@ N_ACTUATOR = len(ACTUATOR_VECTOR)
 A_INV_TAU, A_KU_TAU = N_ACTUATOR, N_ACTUATOR + 1  # rows actuator_rates adds: 1 / tau, K_U / tau
 N_ACTUATOR_ROWS = N_ACTUATOR + 2
 S_INDEX = PLANT_STATES.index("s")  # the sensor whose reference a step command moves
-KX_RATE, KX_FORCE, KX_LIMITED = range(3)  # drive's rows per stage: the actuator's slope, its force,
-KX_ROWS = 3  # and whether its command is at the limit
 FILTER_ROWS = 2  # a sensor filter's states (y, y'): at most one filter, the velocity's
 TERMS = 4  # an amplifier's inputs summed per pass over the lanes (input_groups)
+# A block's integrated states are the rows of one array (plant, amplifiers, actuator, filter), so
+# that a step's RK4 sums run as one loop; their slopes at each stage are rows of one array too,
+# in the same order, with the actuator's force and whether it is at its limit after them.
+P_ROWS = len(PLANT_STATES)
 _JIT = {"cache": True, "error_model": "numpy"}  # as patchgen.bench.kernel's
 
 
@@ -83,6 +85,15 @@ def _partial(j, wiring, sig, acc):
     return (0 if hi > lo else 1), hi
 
 
+@nb.njit(**_JIT)
+def state_rows(na):
+    """(first amplifier, actuator, first filter, force, at-limit) rows of the slopes, and how
+    many of them are integrated states, for na amplifiers (see P_ROWS)."""
+    act = P_ROWS + na
+    force = act + 1 + FILTER_ROWS
+    return P_ROWS, act, act + 1, force, force + 1, force
+
+
 @nb.njit(inline="always", **_JIT)
 def quantised(x, quantum):
     """x as an encoder reports it: the nearest whole count of ``quantum`` (0: x itself)."""
@@ -90,11 +101,11 @@ def quantised(x, quantum):
 
 
 @nb.njit(**_JIT)
-def sensor_filters(X, XF, sensors, kf, st):
+def sensor_filters(X, XF, sensors, K, rf, st):
     """The sensors' filter states at RK4 stage st: filter k holds (y, y') in rows 2k, 2k + 1 of
     a quantised position (of X, the stage's plant states) through
     wn^2 / (s^2 + 2 zeta wn s + wn^2), and y' is the sensor's reading (a velocity from a filter,
-    as a lab without a tachometer has it): their slopes at stage st into kf[st]. The velocity is
+    as a lab without a tachometer has it): their slopes at stage st into K[st], from row rf. The velocity is
     the one rate a lab's sensors read (patchgen.plant.cart_pendulum.MEASURED), so there is at most
     one filter: FILTER_ROWS rows, a fixed count, as the step's loops run fastest over."""
     for i in range(sensors.state.shape[0]):
@@ -105,14 +116,14 @@ def sensor_filters(X, XF, sensors, kf, st):
         for l in range(X.shape[1]):
             u = quantised(X[q, l], d)
             y = 2 * k
-            kf[st, y, l] = XF[y + 1, l]
-            kf[st, y + 1, l] = wn * wn * (u - XF[y, l]) - 2.0 * ze * wn * XF[y + 1, l]
+            K[st, rf + y, l] = XF[y + 1, l]
+            K[st, rf + y + 1, l] = wn * wn * (u - XF[y, l]) - 2.0 * ze * wn * XF[y + 1, l]
 
 
 @nb.njit(**_JIT)
-def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip, sig, raw, dz, st, acc):
+def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip, sig, raw, K, ra, st, acc):
     """Sensors and amplifiers in evaluation order: sig (clipped if clip; its last row stays 0),
-    raw (before clipping), and the amplifier state derivatives into dz[st] (a summer's stay 0).
+    raw (before clipping), and the amplifier state derivatives into K[st], from row ra (a summer's stay 0).
     sensors: patchgen.bench.kernel's Sensors (a sensor reads its plant state, quantised, or its
     filter's output in XF); wiring: patchgen.bench.kernel's Wiring; X, Z, XF, nz, drift and
     sensor_gain (sensor, lane) are per lane."""
@@ -155,7 +166,7 @@ def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip,
         else:  # DIFFERENTIATOR with roll-off: its state's slope, then its output
             p1, p2 = param1[j], param2[j]
             for l in range(nl):
-                dz[st, j, l] = p2 * (_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) - Z[j, l])
+                K[st, ra + j, l] = p2 * (_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) - Z[j, l])
             for l in range(nl):
                 v = -p1 * (_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) - Z[j, l]) + nz[a, l]
                 raw[j, l] = v
@@ -169,11 +180,11 @@ def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip,
             p1 = param1[j]
             if kd == INTEGRATOR:
                 for l in range(nl):
-                    dz[st, j, l] = -p1 * _add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) + drift[j, l]
+                    K[st, ra + j, l] = -p1 * _add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) + drift[j, l]
             else:
                 for l in range(nl):
                     x = _add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3)
-                    dz[st, j, l] = p1 * (-x - Z[j, l]) + drift[j, l]
+                    K[st, ra + j, l] = p1 * (-x - Z[j, l]) + drift[j, l]
 
 
 @nb.njit(**_JIT)
@@ -198,18 +209,19 @@ def _limit(force, flim):
 
 
 @nb.njit(inline="always", **_JIT)
-def _store(kx, st, l, rate, force, limited, tripped):
-    """Lane l's actuator at stage st into kx (KX_ROWS): a tripped run's motor is cut."""
-    kx[st, KX_RATE, l] = rate
-    kx[st, KX_FORCE, l] = 0.0 if tripped else force
-    kx[st, KX_LIMITED, l] = 1.0 if limited else 0.0
+def _store(K, st, l, rx, rate, force, limited, tripped):
+    """Lane l's actuator at stage st into K[st]'s rows rx (its slope, force, at-limit): a tripped
+    run's motor is cut."""
+    K[st, rx[0], l] = rate
+    K[st, rx[1], l] = 0.0 if tripped else force
+    K[st, rx[2], l] = 1.0 if limited else 0.0
 
 
 @nb.njit(**_JIT)
-def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx, st):
+def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, K, rx, st):
     """Actuator (dead zone, model, force limit; off once tripped) and plant slopes per lane,
-    into kp[st] and kx[st] (KX_ROWS: the actuator state's slope, the force, and 1.0 where the
-    command sits at the actuator's limit, else 0.0). act: the actuator's model ACT_*;
+    into K[st]: the plant's rows, and rows rx: the actuator state's slope, the force, and 1.0
+    where the command sits at the actuator's limit, else 0.0. act: the actuator's model ACT_*;
     ap (N_ACTUATOR_ROWS, lane): each lane's
     K_U, tau, dead zone, force limit, back-EMF, then 1 / tau and K_U / tau (actuator_rates); a
     motor's command K_U v is limited at the amplifier (force limit = a V_limit), then the back-EMF
@@ -220,7 +232,7 @@ def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx
     fc, ft = nz.shape[0] - 2, nz.shape[0] - 1
     # Two lane loops, not one: the actuator's branches and the plant's trigonometry in one
     # body keep LLVM from vectorising either; split, both run on whole SIMD registers. Each
-    # stores into one array (kx, kp): a store more, and LLVM can no longer prove the arrays
+    # stores into one array (K): a store more, and LLVM can no longer prove the arrays
     # apart and runs the loop a lane at a time.
     if act == ACT_MOTOR:  # a loop per model: the model's branch outside, nothing left in the loop
         for l in range(XA.shape[0]):
@@ -230,27 +242,27 @@ def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, kp, kx
             xa = XA[l]
             lagged = ap[A_TAU, l] > 0.0
             force = xa if lagged else net
-            _store(kx, st, l, (net - xa) * ap[A_INV_TAU, l] if lagged else 0.0, force, limited, tripped[l])
+            _store(K, st, l, rx, (net - xa) * ap[A_INV_TAU, l] if lagged else 0.0, force, limited, tripped[l])
     elif act == ACT_GAIN:
         for l in range(XA.shape[0]):
             force, limited = _limit(ap[A_K_U, l] * _dead(sig[out_index, l], ap[A_DEAD_ZONE, l]), ap[A_FORCE_LIMIT, l])
-            _store(kx, st, l, 0.0, force, limited, tripped[l])
+            _store(K, st, l, rx, 0.0, force, limited, tripped[l])
     elif act == ACT_LAG:
         for l in range(XA.shape[0]):
             v, xa = _dead(sig[out_index, l], ap[A_DEAD_ZONE, l]), XA[l]
             force, limited = _limit(xa, ap[A_FORCE_LIMIT, l])
-            _store(kx, st, l, (ap[A_K_U, l] * v - xa) * ap[A_INV_TAU, l], force, limited, tripped[l])
+            _store(K, st, l, rx, (ap[A_K_U, l] * v - xa) * ap[A_INV_TAU, l], force, limited, tripped[l])
     else:
         for l in range(XA.shape[0]):
             v, xa = _dead(sig[out_index, l], ap[A_DEAD_ZONE, l]), XA[l]
             force, limited = _limit(ap[A_KU_TAU, l] * (v - xa), ap[A_FORCE_LIMIT, l])
-            _store(kx, st, l, (v - xa) * ap[A_INV_TAU, l], force, limited, tripped[l])
+            _store(K, st, l, rx, (v - xa) * ap[A_INV_TAU, l], force, limited, tripped[l])
     for l in range(XA.shape[0]):
         sd, thd = X[2, l], X[3, l]
         sn, cs = sincos(X[1, l])
-        sdd, thdd = plant_accel(pc, l, sn, cs, sd, thd, kx[st, KX_FORCE, l] + (f_cart + nz[fc, l]),
+        sdd, thdd = plant_accel(pc, l, sn, cs, sd, thd, K[st, rx[1], l] + (f_cart + nz[fc, l]),
                                 f_tip + nz[ft, l])
-        kp[st, 0, l] = sd
-        kp[st, 1, l] = thd
-        kp[st, 2, l] = sdd
-        kp[st, 3, l] = thdd
+        K[st, 0, l] = sd
+        K[st, 1, l] = thd
+        K[st, 2, l] = sdd
+        K[st, 3, l] = thdd

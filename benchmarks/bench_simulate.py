@@ -232,14 +232,15 @@ def monte_carlo() -> None:
 def throughput(repeats: int, process_repeats: int) -> None:
     import numba
 
-    from patchgen.cli.design import design_from_path
-    from patchgen.design.model import plant_params
     from patchgen.patch.build import build_patch
+    from patchgen.pipeline.design import run_design
+    from patchgen.pipeline.inputs import load_inputs, scenario_for
 
-    d, machine = design_from_path("bench-recommended")
-    net, plant = build_patch(d, machine), plant_params(d.spec)
-    bench = load_bench(d.spec.bench, d.spec.path)
-    sc = load_scenario("hold-120s")
+    # as `patchgen simulate` takes them (patchgen.pipeline.simulate.run_simulate)
+    inputs = load_inputs("bench-recommended")
+    d, machine, bench = run_design(inputs).design, inputs.machine, inputs.bench
+    net, plant = build_patch(d, machine), d.plant
+    sc = scenario_for("hold-120s", inputs.spec, runs=MC_RUNS)
     threads = numba.get_num_threads()
     simulate(net, plant, bench, machine, sc, runs=1)  # warm: both entry points, from the cache
     simulate(net, plant, bench, machine, sc.model_copy(update={"duration_s": 1.0}), runs=4 * 64)

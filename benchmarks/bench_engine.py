@@ -44,7 +44,7 @@ def _load() -> str:
 
 
 def config():
-    """The engine's records for bench-recommended in hold-120s, and 64 runs' draws."""
+    """The engine's records for bench-recommended in hold-120s, and LANES runs' draws."""
     inputs = load_inputs("bench-recommended")
     design = run_design(inputs).design
     circuit = compile_circuit(build_patch(design, inputs.machine), inputs.machine, inputs.bench)

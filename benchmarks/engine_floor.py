@@ -1,5 +1,6 @@
-"""The floor the engine is measured against: a lean 64-lane loop of one closed loop, the shipped
-bench-recommended patch on its bench (uw-1991) in hold-120s, written out by hand.
+"""The floor the engine is measured against: a lean loop of one closed loop over the lanes of a
+block (runs side by side), the shipped bench-recommended patch on its bench (uw-1991) in
+hold-120s, written out by hand.
 
 The same plant equations (patchgen.plant.compiled), the same random numbers (patchgen.bench.noise:
 the engine's keys, steps and channels), the same held noise, actuator (lag, dead zone, force
@@ -30,7 +31,7 @@ def _clip(v, hi):
 
 @nb.njit(nogil=True, error_model="numpy")
 def lean_block(keys, signs, plants, gains, nstd, a, x0, act, w, drift_rate, dt, steps, sat):
-    """64 runs (one per row of keys) side by side (w: the wiring's ten input gains in its order, then
+    """Runs (one per row of keys) side by side (w: the wiring's ten input gains in its order, then
     the integrator's rate and the differentiator's two roll-off rates); returns (final state (4, lanes), max |theta|,
     trip step (-1: never), run-steps done)."""
     nl = keys.shape[0]

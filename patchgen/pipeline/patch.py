@@ -3,7 +3,8 @@ patch judged as patched on the bench, and its bench prediction for the sheet."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
 
 from patchgen.bench.diagnosis import as_patched_on_bench
 from patchgen.design.lqg import Design, design_on
@@ -25,12 +26,18 @@ class PatchPlan:
 @dataclass(frozen=True)
 class PatchReport:
     """The design, its patch, the patch judged as patched (design model and bench), and its bench
-    prediction (None when not asked for)."""
+    prediction (None when not asked for), computed in a thread of its own while the patch is
+    rendered: its simulations release the interpreter, the rendering needs it."""
 
     design: Design
     netlist: Netlist
     judged: AsPatched
-    prediction: BenchPrediction | None
+    pending: Future[BenchPrediction] | None = field(repr=False, compare=False)
+
+    @property
+    def prediction(self) -> BenchPrediction | None:
+        """The bench prediction, waited for when it is still being computed."""
+        return None if self.pending is None else self.pending.result()
 
     def summary(self) -> dict:
         """The patch's amplifiers, notes, margins as patched and the bench prediction, as plain data
@@ -61,5 +68,9 @@ def run_patch(inputs: Inputs, plan: PatchPlan = PatchPlan()) -> PatchReport:
     d = design_on(spec, machine, bench)
     net = build_patch(d, machine)
     judged = as_patched_on_bench(d, net, machine, bench)
-    pred = predict_on_bench(d, net, machine, bench, plan.runs_hold) if plan.predict else None
-    return PatchReport(d, net, judged, pred)
+    if not plan.predict:
+        return PatchReport(d, net, judged, None)
+    pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="bench-prediction")
+    pending = pool.submit(predict_on_bench, d, net, machine, bench, plan.runs_hold)
+    pool.shutdown(wait=False)  # the thread ends with the prediction
+    return PatchReport(d, net, judged, pending)

@@ -137,6 +137,8 @@ def patch_report_files(report: PatchReport, machine: MachineProfile, bench: Benc
     """Every file patchgen patch writes, from its report: the bench prediction on the sheet when
     the report has one."""
     d, net = report.design, report.netlist
-    if report.prediction is None:
+    if report.pending is None:
         return patch_files(d, machine, net, judged=report.judged)
-    return predicted_patch_files(d, machine, bench, net, report.prediction, report.judged)
+    # the sheet's bench section last: the prediction is computed while the rest is rendered
+    return patch_files(d, machine, net, lambda: [bench_section(report.prediction, d, machine, bench, net)],
+                       report.judged)

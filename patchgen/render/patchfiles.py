@@ -7,7 +7,7 @@ prediction, why this patch, a pump-up schedule) come from the caller.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from patchgen.design.lqg import Design
@@ -36,8 +36,9 @@ def sheet_summary(d: Design, sections: Sequence[SheetSection] = (), judged: AsPa
     ----------
     d : Design
         The design the patch realises.
-    sections : sequence of SheetSection
-        Extra tables for the sheet, in order.
+    sections : sequence of SheetSection, or a callable returning one
+        Extra tables for the sheet, in order; a callable is called once the rest of the patch is
+        rendered (a bench prediction still being computed is waited for only then).
     judged : AsPatched, optional
         The patch judged as patched: its loops beside the design's ('Margins as patched').
     signs : tuple of SignStep
@@ -104,7 +105,8 @@ def _setup_lines(check: StaticCheck) -> list[str]:
     return out
 
 
-def patch_files(d: Design, machine: MachineProfile, net: Netlist, sections: Sequence[SheetSection] = (),
+def patch_files(d: Design, machine: MachineProfile, net: Netlist,
+                sections: Sequence[SheetSection] | Callable[[], Sequence[SheetSection]] = (),
                 judged: AsPatched | None = None) -> dict[str, str]:
     """Every file of a patch (PATCH_FILES), rendered in memory; nothing is written.
 
@@ -116,8 +118,9 @@ def patch_files(d: Design, machine: MachineProfile, net: Netlist, sections: Sequ
         The machine the patch is allocated on.
     net : Netlist
         The patch.
-    sections : sequence of SheetSection
-        Extra tables for the sheet, in order.
+    sections : sequence of SheetSection, or a callable returning one
+        Extra tables for the sheet, in order; a callable is called once the rest of the patch is
+        rendered (a bench prediction still being computed is waited for only then).
     judged : AsPatched, optional
         The patch judged as patched, on the bench too (patchgen.bench.diagnosis.as_patched_on_bench);
         by default on the design model alone.
@@ -131,8 +134,9 @@ def patch_files(d: Design, machine: MachineProfile, net: Netlist, sections: Sequ
     check = static_check(net, machine)
     files = {"netlist.json": net.to_json(), "margins.json": margins_json(judged, net.design), "pots.csv": pots_csv(net),
              "static-check.csv": static_check_csv(check)}
-    svg = wiring_svg(net)
-    summary = sheet_summary(d, sections, judged, sign_check(net, machine), static_section(check, net))
-    html, md = render_sheet(net, summary, diagram_pages(net), machine.procedure)
+    svg, pages, signs = wiring_svg(net), diagram_pages(net), sign_check(net, machine)
+    sections = sections() if callable(sections) else sections  # late: after what does not need them
+    summary = sheet_summary(d, sections, judged, signs, static_section(check, net))
+    html, md = render_sheet(net, summary, pages, machine.procedure)
     files.update({"wiring.svg": svg, "patch-sheet.html": html, "patch-sheet.md": md})
     return files

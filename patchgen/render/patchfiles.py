@@ -18,7 +18,7 @@ from patchgen.patch.netlist import Netlist
 from patchgen.patch.sign_check import SignStep, sign_check
 from patchgen.patch.static_check import StaticCheck, static_check, static_check_csv
 from patchgen.profiles.machine import MachineProfile
-from patchgen.render.diagram import wiring_svg
+from patchgen.render.diagram import wiring_diagram
 from patchgen.render.diagram_pages import diagram_pages
 from patchgen.render.margins_view import margin_cells, margins_json
 from patchgen.render.pottable import pots_csv
@@ -131,8 +131,8 @@ def patch_files(d: Design, machine: MachineProfile, net: Netlist, sections: Sequ
     check = static_check(net, machine)
     files = {"netlist.json": net.to_json(), "margins.json": margins_json(judged, net.design), "pots.csv": pots_csv(net),
              "static-check.csv": static_check_csv(check)}
-    svg = wiring_svg(net)
+    whole = wiring_diagram(net)
     summary = sheet_summary(d, sections, judged, sign_check(net, machine), static_section(check, net))
-    html, md = render_sheet(net, summary, diagram_pages(net), machine.procedure)
-    files.update({"wiring.svg": svg, "patch-sheet.html": html, "patch-sheet.md": md})
+    html, md = render_sheet(net, summary, diagram_pages(net, whole), machine.procedure)
+    files.update({"wiring.svg": whole.svg, "patch-sheet.html": html, "patch-sheet.md": md})
     return files

@@ -59,7 +59,7 @@ from patchgen.render.diagram_symbols import (
     line_pitch,
     text_box,
 )
-from patchgen.render.schematic import Line, schemdraw, svg_backend
+from patchgen.render.schematic import BBox, Line, schemdraw, svg_backend
 
 
 def wiring_svg(netlist: Netlist) -> str:
@@ -95,6 +95,14 @@ def graph_diagram(graph: Graph) -> Diagram:
     return Diagram(graph, _Painter(layout, measure(layout)).paint())
 
 
+def labels_size_pt(graph: Graph) -> tuple[float, float]:
+    """The size (pt) of a diagram's labels alone, at a tenth of the cost of drawing it: its labels'
+    extents are part of its bounds, so this is no larger than ``graph_diagram(graph).size_pt``
+    (the same floats, through the same sums), and near it: the labels reach furthest out."""
+    layout = place(graph)
+    return Diagram(graph, _Painter(layout, measure(layout), _Labels).paint()).size_pt
+
+
 class Diagram:
     """A diagram drawn: its graph, its size as its SVG states it, and the SVG, rendered once and
     only when asked for (a diagram too large for a page is measured, then drawn again in parts)."""
@@ -122,9 +130,9 @@ class Diagram:
 class _Painter:
     """Draws a laid-out, measured diagram on a schemdraw drawing."""
 
-    def __init__(self, layout: Layout, geo: Geometry):
+    def __init__(self, layout: Layout, geo: Geometry, drawing: type[_Drawing] | None = None):
         self.layout, self.geo = layout, geo
-        self.d = _Drawing(canvas="svg", show=False)
+        self.d = (drawing or _Drawing)(canvas="svg", show=False)
         self.d.config(fontsize=SMALL_PT, font=FONT, lw=WIRE_LW, margin=0.1)
         self.wires: list[tuple[str, tuple[float, float], tuple[float, float]]] = []
 
@@ -296,6 +304,19 @@ class _Drawing(schemdraw.Drawing):
             ys = [y for _, y in self._extents] + [box.ymin, box.ymax]
             self._bbox = held, type(box)(min(xs), min(ys), max(xs), max(ys))
         return self._bbox[1]
+
+
+class _Labels(_Drawing):
+    """A drawing that places nothing and keeps its labels' extents alone (:func:`labels_size_pt`)."""
+
+    def add(self, element):
+        return element
+
+    def get_bbox(self):
+        if not self._extents:  # no label: a point (any size is at least its margins)
+            return BBox(0.0, 0.0, 0.0, 0.0)
+        xs, ys = zip(*self._extents)
+        return BBox(min(xs), min(ys), max(xs), max(ys))
 
 
 def _junctions(wires) -> list[tuple[float, float]]:

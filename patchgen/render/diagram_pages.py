@@ -13,7 +13,7 @@ import re
 from dataclasses import dataclass
 
 from patchgen.patch.netlist import Netlist
-from patchgen.render.diagram import Diagram, graph_diagram, wiring_diagram
+from patchgen.render.diagram import Diagram, graph_diagram, labels_size_pt, wiring_diagram
 from patchgen.render.diagram_graph import Graph, loose_pots, page_graph, unit_of, units
 from patchgen.render.diagram_layout import place
 from patchgen.render.diagram_symbols import SMALLEST_PT
@@ -48,7 +48,10 @@ def fits(svg: str) -> bool:
 
 def _fits(diagram: Diagram) -> bool:
     """:func:`fits` for a diagram drawn, from its size, without rendering its SVG."""
-    width, height = diagram.size_pt
+    return _fits_pt(*diagram.size_pt)
+
+
+def _fits_pt(width: float, height: float) -> bool:
     return _fits_at(_scale(width * MM_PER_PT, height * MM_PER_PT))
 
 
@@ -123,26 +126,29 @@ def diagram_parts(net: Netlist, whole: Diagram | None = None) -> list[DiagramPag
 
 def _parts(net: Netlist, unit: str) -> list[tuple[tuple[str, ...], tuple[str, ...], Diagram]]:
     """A unit's diagram in as few parts as each print at PRINTED_MIN_PT on a page: each part's
-    amplifiers, the pots it draws, and its diagram (measured before its SVG is rendered)."""
+    amplifiers, the pots it draws, and its diagram (measured before its SVG is rendered). A whole
+    whose labels alone are too large for a page (diagram.labels_size_pt) is not drawn at all."""
     amps = [a.id for a in net.amplifiers if unit_of(a.id) == unit]
     loose = loose_pots(net, unit)
-    whole = _drawn(net, unit, amps, loose)
-    if _fits(whole[2]) or len(amps) + len(loose) <= 1:
-        return [whole]
-    rows = place(whole[2].graph).places
+    graph = page_graph(net, unit, amps, loose)
+    counts = range(2, max(len(amps), len(loose)) + 1)  # the parts tried when the whole does not fit
+    if len(amps) + len(loose) <= 1 or not counts or _fits_pt(*labels_size_pt(graph)):
+        whole = _drawn(net, unit, amps, loose, graph)
+        if len(amps) + len(loose) <= 1 or not counts or _fits(whole[2]):
+            return [whole]
+    rows = place(graph).places
     stacked = sorted(amps, key=lambda a: (rows[a].row, rows[a].stage))
-    best = [whole]
-    for n in range(2, max(len(amps), len(loose)) + 1):
+    for n in counts:
         best = [_drawn(net, unit, run, pots) for run, pots in _split(net, stacked, loose, n)]
         if all(_fits(drawn) for *_, drawn in best):
             break
     return best
 
 
-def _drawn(net: Netlist, unit: str, amps: list[str], loose: list[str]):
+def _drawn(net: Netlist, unit: str, amps: list[str], loose: list[str], graph: Graph | None = None):
     """One part drawn: its amplifiers, the pots it draws (theirs on this unit, and ``loose``), and
-    its diagram."""
-    graph = page_graph(net, unit, amps, loose)
+    its diagram (of ``graph``, its page graph, when the caller has made it)."""
+    graph = page_graph(net, unit, amps, loose) if graph is None else graph
     pots = tuple(p.id for p in net.pots if (unit_of(p.id) == unit and p.amplifier in amps) or p.id in loose)
     return tuple(amps), pots, graph_diagram(graph)
 

@@ -15,7 +15,6 @@ set of inverters that starts with a choice no completion of which leaves few eno
 from __future__ import annotations
 
 import functools
-import itertools
 import operator
 
 from patchgen.patch.jacks import JackFit, signal_bits
@@ -46,16 +45,36 @@ def _mismatch_tables(blocks: list[Block], kept: dict[str, list[Term]], free: lis
     return tables
 
 
-def _mismatches(tables, pols: tuple[int, ...]) -> list[int]:
-    """Each block's mismatched signal bits under the free polarities ``pols``."""
-    masks = []
-    for j_own, per_pol in tables:
-        fixed, by_free = per_pol[0 if j_own is not None and pols[j_own] < 0 else 1]
-        m = fixed
-        for j, neg, pos in by_free:
-            m |= pos if pols[j] > 0 else neg
-        masks.append(m)
-    return masks
+def _polarities(tables, fit: JackFit, n: int):
+    """The free polarities (itertools.product order) with each block's mismatched signal bits,
+    less every choice under which some block fits for no choice of shared inverters: a block is
+    judged as soon as the polarities its mismatches depend on are set, and every choice that
+    shares those is dropped with it (each would fail the same test)."""
+    ready: list[list[int]] = [[] for _ in range(n + 1)]  # blocks judged once polarities 0..d-1 are set
+    for i, (j_own, per_pol) in enumerate(tables):
+        deps = {j for _, by_free in per_pol for j, _, _ in by_free} | ({j_own} - {None})
+        ready[max(deps) + 1 if deps else 0].append(i)
+    pols = [0] * n
+    masks = [0] * len(tables)
+
+    def walk(d: int):
+        for i in ready[d]:
+            j_own, per_pol = tables[i]
+            fixed, by_free = per_pol[0 if j_own is not None and pols[j_own] < 0 else 1]
+            m = fixed
+            for j, neg, pos in by_free:
+                m |= pos if pols[j] > 0 else neg
+            if not fit.possible(i, m):
+                return
+            masks[i] = m
+        if d == n:
+            yield tuple(pols), list(masks)
+            return
+        for p in (-1, 1):
+            pols[d] = p
+            yield from walk(d + 1)
+
+    return walk(0)
 
 
 def _uncovered_at_least(mism: list[tuple[int, int]], k: int) -> int:
@@ -101,12 +120,9 @@ def search(blocks: list[Block], kept: dict[str, list[Term]], machine: MachinePro
     fit = JackFit(blocks, kept, machine, bit)
     tables = _mismatch_tables(blocks, kept, free, bit)
     best = None  # ((amplifiers, inverters), polarities, shared bits, pre: block index -> bits)
-    for pols in itertools.product((-1, 1), repeat=len(free)):
-        masks = _mismatches(tables, pols)
+    for pols, masks in _polarities(tables, fit, len(free)):
         mism = [(i, m) for i, m in enumerate(masks) if m]  # blocks with a mismatched term, in order
         union = functools.reduce(operator.or_, masks, 0)
-        if not all(fit.possible(i, m) for i, m in enumerate(masks)):
-            continue  # a block that fits for no choice of inverters: nothing here fits
         cand = [1 << n for n in range(union.bit_length()) if union >> n & 1]  # sorted names
         ms = [m for _, m in mism]
         for k in range(len(cand) + 1):

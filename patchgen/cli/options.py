@@ -13,7 +13,6 @@ import click
 
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.resources import shipped
-from patchgen.studies.sweep import VARIABLE
 
 SEED = click.IntRange(0, 2**63 - 1)  # numpy's generators take a non-negative 64-bit seed
 
@@ -84,7 +83,10 @@ class FiniteFloat(click.ParamType):
 
 
 def parse_vary(text: str, option: str = "--vary") -> list[str]:
-    """Comma-separated plant parameters (of VARIABLE); an InputError naming ``option`` otherwise."""
+    """Comma-separated plant parameters (of patchgen.studies.sweep.VARIABLE); an InputError naming
+    ``option`` otherwise."""
+    from patchgen.studies.sweep import VARIABLE  # the sweep's own (and its process pool): for sweep alone
+
     names = [t.strip() for t in text.split(",") if t.strip()]
     for n in names:
         if n not in VARIABLE:

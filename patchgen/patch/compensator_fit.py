@@ -205,37 +205,58 @@ def try_fit(design: Design, order: int, method: str, law: comp.Compensator, form
         return Fit(order, method, form, law, dm, error=UNSTABLE_LAW)
     fs = form_system(law, form)
     pk = peaks(design, law, fs)  # the form's scaling excursions: the same however its states are shrunk or staged
-    plain = _place_scaled(design, order, method, law, fs, pk, machine, units, dm, staged=False)
+    placed: dict[str, _Placed] = {}  # a staging that changes no block places the plain realisation again
+    plain = _place_scaled(design, order, method, law, fs, pk, machine, units, dm, False, placed)
     if plain.netlist is not None and plain.peak_fraction <= 1.0:
         return plain
-    again = _place_scaled(design, order, method, law, fs, pk, machine, units, dm, staged=True)
+    again = _place_scaled(design, order, method, law, fs, pk, machine, units, dm, True, placed)
     if again.netlist is None or (plain.netlist is not None and again.peak_fraction >= plain.peak_fraction):
         return plain
     return again
 
 
+@dataclass
+class _Placed:
+    """One realisation on the fewest units that take it: the patch (None, with the last unit
+    count's error, when none does), its amplifiers' peaks, and its dialled margins once asked for."""
+
+    netlist: Netlist | None
+    error: str | None
+    peaks: dict[str, float] = field(default_factory=dict)
+    margins: Margins | None = None
+
+
+def _place(design: Design, real, machine: MachineProfile, units: list[int]) -> _Placed:
+    """Allocate ``real`` on the first of ``units`` slaved units that takes it, and its peaks."""
+    err = None
+    for n in units:
+        try:
+            net = allocate(real, machine.slaved(n), design.spec.path)
+        except (ResourceError, InputError) as exc:
+            err = exc.message
+            continue
+        net = net.model_copy(update={"units": n, "machine_name": machine.name})
+        return _Placed(net, None, amplifier_peaks(design, net))
+    return _Placed(None, err)
+
+
 def _place_scaled(design: Design, order: int, method: str, law: comp.Compensator, fs: FormSystem,
                   pk: tuple[float, np.ndarray], machine: MachineProfile, units: list[int], dm: Margins,
-                  staged: bool) -> Fit:
-    """:func:`try_fit` for one choice of staging (``fs`` the law in its form, ``pk`` its peaks)."""
+                  staged: bool, placed: dict[str, _Placed]) -> Fit:
+    """:func:`try_fit` for one choice of staging (``fs`` the law in its form, ``pk`` its peaks);
+    ``placed``: the realisations already placed, by their repr (exact: floats print to the bit)."""
     form = fs.form
     shrink: dict[str, float] = {}
-    err = None
     for _ in range(SHRINK_ROUNDS):
         real = realize_compensator(design, law, form, machine, shrink, staged, (fs, pk))
         rng = coefficient_range(real, machine.pot_resolution)
-        net = None
-        for n in units:
-            try:
-                net = allocate(real, machine.slaved(n), design.spec.path)
-            except (ResourceError, InputError) as exc:
-                err = exc.message
-                continue
-            net = net.model_copy(update={"units": n, "machine_name": machine.name})
-            break
-        if net is None:
-            return Fit(order, method, form, law, dm, error=err, coefficients=rng, staged=staged)
-        peaks = amplifier_peaks(design, net)
+        key = repr(real)
+        if key not in placed:
+            placed[key] = _place(design, real, machine, units)
+        got = placed[key]
+        if got.netlist is None:
+            return Fit(order, method, form, law, dm, error=got.error, coefficients=rng, staged=staged)
+        net, peaks = got.netlist, got.peaks
         limit = AMPLITUDE * machine.reference_V
         over = {}
         for a in net.amplifiers:
@@ -247,7 +268,9 @@ def _place_scaled(design: Design, order: int, method: str, law: comp.Compensator
         for b, f in over.items():
             shrink[b] = shrink.get(b, 1.0) * f
     peak = max(peaks.values()) / machine.reference_V
-    return Fit(order, method, form, law, dm, net, None, rng, peak, dialled_margins(design, net), staged)
+    if got.margins is None:
+        got.margins = dialled_margins(design, net)
+    return Fit(order, method, form, law, dm, net, None, rng, peak, got.margins, staged)
 
 
 def fits(design: Design, machine: MachineProfile, units: list[int], form: str = "auto",

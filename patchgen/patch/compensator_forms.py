@@ -164,6 +164,7 @@ def excursion_peaks(Acl: np.ndarray, Cout: np.ndarray, where: list[int]) -> np.n
     steps = int(round(SCALING_HORIZON_S / SCALING_STEP_S))
     peak = np.zeros(Cout.shape[0])
     xs = np.empty((steps, Acl.shape[0]))
+    dot = np.dot
     for i, value in zip(where, (SCALING_THETA0_RAD, SCALING_S0_M)):
         x = np.zeros(Acl.shape[0])
         x[i] = value
@@ -174,8 +175,8 @@ def excursion_peaks(Acl: np.ndarray, Cout: np.ndarray, where: list[int]) -> np.n
         with np.errstate(over="ignore", invalid="ignore"):
             while done < steps:
                 chunk = xs[done:min(done + EXCURSION_CHUNK, steps)]
-                for k in range(chunk.shape[0]):
-                    x = np.dot(Phi, x, out=chunk[k])
+                for row in chunk:  # each a view of its row, as chunk[k] is
+                    x = dot(Phi, x, row)
                 bad = ~np.isfinite(chunk).all(axis=1) | (np.abs(chunk).max(axis=1) > 1e12)
                 if bad.any():
                     done += int(np.argmax(bad)) + 1

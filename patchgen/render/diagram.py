@@ -59,7 +59,7 @@ from patchgen.render.diagram_symbols import (
     line_pitch,
     text_box,
 )
-from patchgen.render.schematic import Line, schemdraw, svg_backend
+from patchgen.render.schematic import BBox, Line, schemdraw, svg_backend
 
 
 def wiring_svg(netlist: Netlist) -> str:
@@ -76,21 +76,63 @@ def wiring_svg(netlist: Netlist) -> str:
         SVG text: every sensor, amplifier, pot and external part, and the control voltage; the
         same netlist gives the same bytes.
     """
-    return graph_svg(whole_graph(netlist))
+    return wiring_diagram(netlist).svg
+
+
+def wiring_diagram(netlist: Netlist) -> Diagram:
+    """The wiring diagram of the whole patch, drawn (:func:`wiring_svg` is its SVG)."""
+    return graph_diagram(whole_graph(netlist))
 
 
 def graph_svg(graph: Graph) -> str:
     """The SVG document of one diagram (patchgen.render.diagram_graph)."""
+    return graph_diagram(graph).svg
+
+
+def graph_diagram(graph: Graph) -> Diagram:
+    """One diagram laid out and drawn, its SVG rendered when first asked for."""
     layout = place(graph)
-    return _Painter(layout, measure(layout)).paint()
+    return Diagram(graph, _Painter(layout, measure(layout)).paint())
+
+
+def labels_size_pt(graph: Graph) -> tuple[float, float]:
+    """The size (pt) of a diagram's labels alone, at a tenth of the cost of drawing it: its labels'
+    extents are part of its bounds, so this is no larger than ``graph_diagram(graph).size_pt``
+    (the same floats, through the same sums), and near it: the labels reach furthest out."""
+    layout = place(graph)
+    return Diagram(graph, _Painter(layout, measure(layout), _Labels).paint()).size_pt
+
+
+class Diagram:
+    """A diagram drawn: its graph, its size as its SVG states it, and the SVG, rendered once and
+    only when asked for (a diagram too large for a page is measured, then drawn again in parts)."""
+
+    def __init__(self, graph: Graph, drawing: _Drawing):
+        self.graph, self._drawing, self._svg = graph, drawing, None
+
+    @property
+    def size_pt(self) -> tuple[float, float]:
+        """Width and height (pt): the drawing's bounds with schemdraw's margin, at its scale, as
+        its SVG backend sizes the document (the same floats the SVG's width and height print)."""
+        d = self._drawing
+        fig = svg_backend.Figure(bbox=d.get_bbox(), inches_per_unit=d.dwgparams.get("inches_per_unit"),
+                                 margin=d.dwgparams.get("margin"))
+        return fig.pxwidth, fig.pxheight
+
+    @property
+    def svg(self) -> str:
+        """The SVG document (see :func:`_render`)."""
+        if self._svg is None:
+            self._svg = _render(self._drawing)
+        return self._svg
 
 
 class _Painter:
     """Draws a laid-out, measured diagram on a schemdraw drawing."""
 
-    def __init__(self, layout: Layout, geo: Geometry):
+    def __init__(self, layout: Layout, geo: Geometry, drawing: type[_Drawing] | None = None):
         self.layout, self.geo = layout, geo
-        self.d = _Drawing(canvas="svg", show=False)
+        self.d = (drawing or _Drawing)(canvas="svg", show=False)
         self.d.config(fontsize=SMALL_PT, font=FONT, lw=WIRE_LW, margin=0.1)
         self.wires: list[tuple[str, tuple[float, float], tuple[float, float]]] = []
 
@@ -106,7 +148,8 @@ class _Painter:
         self.d.extent(x0, y0)
         self.d.extent(x1, y1)
 
-    def paint(self) -> str:
+    def paint(self) -> _Drawing:
+        """Every element added to the drawing (rendering is :func:`_render`)."""
         g = self.layout.graph
         for s in g.sources:
             self.terminal(s.kind, s.name, s.details, self.geo.row_y[self.layout.source_row[s.id]], "left")
@@ -119,7 +162,7 @@ class _Painter:
             self.d.add(Line().at(a).to(b).linewidth(WIRE_LW))
         for pt in _junctions(self.wires):
             self.d.add(Dot().at(pt))
-        return _render(self.d)
+        return self.d
 
     def terminal(self, kind: str, name: str, details: tuple[str, ...], y: float, side: str,
                  x: float = 0.0) -> None:
@@ -242,20 +285,38 @@ class _Painter:
 
 
 class _Drawing(schemdraw.Drawing):
-    """A drawing whose bounds also cover its labels (schemdraw underestimates text width)."""
+    """A drawing whose bounds also cover its labels (schemdraw underestimates text width), found
+    once for what it holds (a diagram's size and its SVG both ask for them)."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._extents: list[tuple[float, float]] = []
+        self._bbox: tuple[tuple[int, int], object] | None = None  # (element and extent counts, bounds)
 
     def extent(self, x: float, y: float) -> None:
         self._extents.append((x, y))
 
     def get_bbox(self):
-        box = super().get_bbox()
-        xs = [x for x, _ in self._extents] + [box.xmin, box.xmax]
-        ys = [y for _, y in self._extents] + [box.ymin, box.ymax]
-        return type(box)(min(xs), min(ys), max(xs), max(ys))
+        held = (len(self.elements), len(self._extents))
+        if self._bbox is None or self._bbox[0] != held:
+            box = super().get_bbox()
+            xs = [x for x, _ in self._extents] + [box.xmin, box.xmax]
+            ys = [y for _, y in self._extents] + [box.ymin, box.ymax]
+            self._bbox = held, type(box)(min(xs), min(ys), max(xs), max(ys))
+        return self._bbox[1]
+
+
+class _Labels(_Drawing):
+    """A drawing that places nothing and keeps its labels' extents alone (:func:`labels_size_pt`)."""
+
+    def add(self, element):
+        return element
+
+    def get_bbox(self):
+        if not self._extents:  # no label: a point (any size is at least its margins)
+            return BBox(0.0, 0.0, 0.0, 0.0)
+        xs, ys = zip(*self._extents)
+        return BBox(min(xs), min(ys), max(xs), max(ys))
 
 
 def _junctions(wires) -> list[tuple[float, float]]:

@@ -13,8 +13,8 @@ import re
 from dataclasses import dataclass
 
 from patchgen.patch.netlist import Netlist
-from patchgen.render.diagram import graph_svg, wiring_svg
-from patchgen.render.diagram_graph import Graph, loose_pots, page_graph, unit_of, units, whole_graph
+from patchgen.render.diagram import Diagram, graph_diagram, labels_size_pt, wiring_diagram
+from patchgen.render.diagram_graph import Graph, loose_pots, page_graph, unit_of, units
 from patchgen.render.diagram_layout import place
 from patchgen.render.diagram_symbols import SMALLEST_PT
 
@@ -34,13 +34,29 @@ def svg_size_mm(svg: str) -> tuple[float, float]:
 
 def printed_scale(svg: str, height_mm: float = PRINT_HEIGHT_MM) -> float:
     """The scale a diagram prints at: its own size, shrunk to the page's width and ``height_mm``."""
-    width, height = svg_size_mm(svg)
+    return _scale(*svg_size_mm(svg), height_mm)
+
+
+def _scale(width: float, height: float, height_mm: float = PRINT_HEIGHT_MM) -> float:
     return min(1.0, PRINT_WIDTH_MM / width, height_mm / height)
 
 
 def fits(svg: str) -> bool:
     """Whether a diagram, shrunk to a page, prints its smallest label at PRINTED_MIN_PT or more."""
-    return SMALLEST_PT * printed_scale(svg) >= PRINTED_MIN_PT - 1e-9
+    return _fits_at(printed_scale(svg))
+
+
+def _fits(diagram: Diagram) -> bool:
+    """:func:`fits` for a diagram drawn, from its size, without rendering its SVG."""
+    return _fits_pt(*diagram.size_pt)
+
+
+def _fits_pt(width: float, height: float) -> bool:
+    return _fits_at(_scale(width * MM_PER_PT, height * MM_PER_PT))
+
+
+def _fits_at(scale: float) -> bool:
+    return SMALLEST_PT * scale >= PRINTED_MIN_PT - 1e-9
 
 
 @dataclass(frozen=True)
@@ -55,29 +71,33 @@ class DiagramPage:
     svg: str
 
 
-def diagram_pages(net: Netlist) -> list[tuple[str, str]]:
+def diagram_pages(net: Netlist, whole: Diagram | None = None) -> list[tuple[str, str]]:
     """The wiring diagrams a patch sheet prints, a page each.
 
     Parameters
     ----------
     net : Netlist
         The patch.
+    whole : Diagram, optional
+        Its whole wiring diagram when the caller has drawn it (patchgen.render.diagram.wiring_diagram).
 
     Returns
     -------
     list of (str, str)
         (caption, SVG text) for each page (:func:`diagram_parts`).
     """
-    return [(p.caption, p.svg) for p in diagram_parts(net)]
+    return [(p.caption, p.svg) for p in diagram_parts(net, whole)]
 
 
-def diagram_parts(net: Netlist) -> list[DiagramPage]:
+def diagram_parts(net: Netlist, whole: Diagram | None = None) -> list[DiagramPage]:
     """The wiring diagrams a patch sheet prints, with what each draws.
 
     Parameters
     ----------
     net : Netlist
         The patch.
+    whole : Diagram, optional
+        As for :func:`diagram_pages`.
 
     Returns
     -------
@@ -91,42 +111,46 @@ def diagram_parts(net: Netlist) -> list[DiagramPage]:
     """
     found = units(net)
     if found == [""]:
-        whole = wiring_svg(net)
-        if fits(whole):
+        whole = wiring_diagram(net) if whole is None else whole
+        if _fits(whole):
             return [DiagramPage(f"{net.design} on {net.machine_name}", tuple(a.id for a in net.amplifiers),
-                                tuple(p.id for p in net.pots), whole_graph(net), whole)]
+                                tuple(p.id for p in net.pots), whole.graph, whole.svg)]
     pages = []
     for unit in found:
         parts = _parts(net, unit)
-        for k, (amps, pots, graph, svg) in enumerate(parts, 1):
-            pages.append(DiagramPage(_caption(net, unit, found, graph, k, len(parts)), amps, pots, graph, svg))
+        for k, (amps, pots, drawn) in enumerate(parts, 1):
+            pages.append(DiagramPage(_caption(net, unit, found, drawn.graph, k, len(parts)), amps, pots,
+                                     drawn.graph, drawn.svg))
     return pages
 
 
-def _parts(net: Netlist, unit: str) -> list[tuple[tuple[str, ...], tuple[str, ...], Graph, str]]:
+def _parts(net: Netlist, unit: str) -> list[tuple[tuple[str, ...], tuple[str, ...], Diagram]]:
     """A unit's diagram in as few parts as each print at PRINTED_MIN_PT on a page: each part's
-    amplifiers, the pots it draws, its graph and SVG."""
+    amplifiers, the pots it draws, and its diagram (measured before its SVG is rendered). A whole
+    whose labels alone are too large for a page (diagram.labels_size_pt) is not drawn at all."""
     amps = [a.id for a in net.amplifiers if unit_of(a.id) == unit]
     loose = loose_pots(net, unit)
-    whole = _drawn(net, unit, amps, loose)
-    if fits(whole[3]) or len(amps) + len(loose) <= 1:
-        return [whole]
-    rows = place(whole[2]).places
+    graph = page_graph(net, unit, amps, loose)
+    counts = range(2, max(len(amps), len(loose)) + 1)  # the parts tried when the whole does not fit
+    if len(amps) + len(loose) <= 1 or not counts or _fits_pt(*labels_size_pt(graph)):
+        whole = _drawn(net, unit, amps, loose, graph)
+        if len(amps) + len(loose) <= 1 or not counts or _fits(whole[2]):
+            return [whole]
+    rows = place(graph).places
     stacked = sorted(amps, key=lambda a: (rows[a].row, rows[a].stage))
-    best = [whole]
-    for n in range(2, max(len(amps), len(loose)) + 1):
+    for n in counts:
         best = [_drawn(net, unit, run, pots) for run, pots in _split(net, stacked, loose, n)]
-        if all(fits(svg) for *_, svg in best):
+        if all(_fits(drawn) for *_, drawn in best):
             break
     return best
 
 
-def _drawn(net: Netlist, unit: str, amps: list[str], loose: list[str]):
-    """One part drawn: its amplifiers, the pots it draws (theirs on this unit, and ``loose``), its
-    graph and SVG."""
-    graph = page_graph(net, unit, amps, loose)
+def _drawn(net: Netlist, unit: str, amps: list[str], loose: list[str], graph: Graph | None = None):
+    """One part drawn: its amplifiers, the pots it draws (theirs on this unit, and ``loose``), and
+    its diagram (of ``graph``, its page graph, when the caller has made it)."""
+    graph = page_graph(net, unit, amps, loose) if graph is None else graph
     pots = tuple(p.id for p in net.pots if (unit_of(p.id) == unit and p.amplifier in amps) or p.id in loose)
-    return tuple(amps), pots, graph, graph_svg(graph)
+    return tuple(amps), pots, graph_diagram(graph)
 
 
 def _split(net: Netlist, amps: list[str], loose: list[str], n: int) -> list[tuple[list[str], list[str]]]:

@@ -18,7 +18,7 @@ from patchgen.patch.netlist import Netlist
 from patchgen.patch.sign_check import SignStep, sign_check
 from patchgen.patch.static_check import StaticCheck, static_check, static_check_csv
 from patchgen.profiles.machine import MachineProfile
-from patchgen.render.diagram import wiring_svg
+from patchgen.render.diagram import wiring_diagram
 from patchgen.render.diagram_pages import diagram_pages
 from patchgen.render.margins_view import margin_cells, margins_json
 from patchgen.render.pottable import pots_csv
@@ -134,7 +134,8 @@ def patch_files(d: Design, machine: MachineProfile, net: Netlist,
     check = static_check(net, machine)
     files = {"netlist.json": net.to_json(), "margins.json": margins_json(judged, net.design), "pots.csv": pots_csv(net),
              "static-check.csv": static_check_csv(check)}
-    svg, pages, signs = wiring_svg(net), diagram_pages(net), sign_check(net, machine)
+    whole = wiring_diagram(net)
+    svg, pages, signs = whole.svg, diagram_pages(net, whole), sign_check(net, machine)
     sections = sections() if callable(sections) else sections  # late: after what does not need them
     summary = sheet_summary(d, sections, judged, signs, static_section(check, net))
     html, md = render_sheet(net, summary, pages, machine.procedure)

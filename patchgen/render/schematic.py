@@ -23,5 +23,7 @@ import schemdraw  # noqa: E402
 from schemdraw.backends import svg as svg_backend  # noqa: E402
 from schemdraw.elements import Element, Line  # noqa: E402
 from schemdraw.segments import Segment, SegmentCircle, SegmentPoly, SegmentText  # noqa: E402
+from schemdraw.types import BBox  # noqa: E402
 
-__all__ = ["Element", "Line", "Segment", "SegmentCircle", "SegmentPoly", "SegmentText", "schemdraw", "svg_backend"]
+__all__ = ["BBox", "Element", "Line", "Segment", "SegmentCircle", "SegmentPoly", "SegmentText", "schemdraw",
+           "svg_backend"]

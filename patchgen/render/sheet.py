@@ -25,6 +25,7 @@ from patchgen.render.diagram_pages import PRINTED_MIN_PT, printed_scale, svg_siz
 from patchgen.render.diagram_symbols import SMALLEST_PT, dial_decimals, quantity_label, signed_label
 from patchgen.render.margins_view import patched_banner, patched_context
 from patchgen.render.sign_sheet import sign_note, sign_rows
+from patchgen.render.template_cache import bytecode_cache
 
 
 @dataclass(frozen=True)
@@ -303,6 +304,7 @@ def _env(autoescape: bool) -> jinja2.Environment:
         trim_blocks=True,
         lstrip_blocks=True,
         keep_trailing_newline=True,
+        bytecode_cache=bytecode_cache(),
     )
 
 

@@ -9,8 +9,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from patchgen.patch.netlist import Netlist, read_netlist
-from patchgen.render.diagram import wiring_svg
-from patchgen.render.diagram_pages import diagram_pages
+from patchgen.render.diagram import wiring_diagram, wiring_svg
+from patchgen.render.diagram_pages import MM_PER_PT, diagram_pages, svg_size_mm
 from patchgen.render.diagram_symbols import quantity_label
 
 FIXTURE = Path(__file__).parents[1] / "fixtures" / "thesis-ch5.netlist.json"
@@ -119,6 +119,17 @@ def test_one_machine_is_one_page_the_whole_diagram():
     [(caption, svg)] = diagram_pages(net)
     assert svg == wiring_svg(net)
     assert caption == f"{net.design} on {net.machine_name}"
+
+
+def test_a_diagram_measured_before_it_is_rendered_has_the_size_its_svg_states():
+    """diagram_pages measures a diagram without rendering it (one too large for a page is drawn
+    again in parts): the size it reads is the SVG's own, and the SVG is the same after it."""
+    for net in (read_netlist(FIXTURE), _two_unit_netlist()):
+        whole = wiring_diagram(net)
+        width, height = whole.size_pt
+        assert svg_size_mm(whole.svg) == (width * MM_PER_PT, height * MM_PER_PT)
+        assert whole.svg == wiring_svg(net)
+        assert diagram_pages(net, whole) == diagram_pages(net)
 
 
 def test_slaved_units_are_one_page_each_with_flags_between_them():

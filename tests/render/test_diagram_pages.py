@@ -12,7 +12,8 @@ import re
 import pytest
 
 from patchgen.patch.netlist import Netlist, cords
-from patchgen.render.diagram_graph import unit_of
+from patchgen.render.diagram import graph_diagram, labels_size_pt
+from patchgen.render.diagram_graph import loose_pots, page_graph, unit_of, units
 from patchgen.render.diagram_pages import DiagramPage, diagram_parts, fits
 from tests.shipped import patch_of, shipped_cases
 
@@ -58,6 +59,18 @@ def test_every_page_prints_its_smallest_label_at_6_pt_on_a_page(drawn):
     for key, (_, pages) in drawn.items():
         for p in pages:
             assert fits(p.svg), (key, p.caption)
+
+
+def test_a_diagrams_labels_alone_are_no_larger_than_the_diagram(drawn):
+    """A unit whose labels alone are too large for a page is split without drawing it whole: the
+    labels' size bounds the diagram's from below."""
+    for key, (net, pages) in drawn.items():
+        graphs = [p.graph for p in pages] + [page_graph(net, u, [a.id for a in net.amplifiers if unit_of(a.id) == u],
+                                                        loose_pots(net, u)) for u in units(net) if u]
+        for g in graphs:
+            width, height = labels_size_pt(g)
+            full = graph_diagram(g).size_pt
+            assert width <= full[0] and height <= full[1], key
 
 
 def test_every_element_is_drawn_on_one_page(drawn):

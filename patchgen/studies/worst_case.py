@@ -27,7 +27,6 @@ import itertools
 from collections.abc import Callable, Sequence
 
 import numpy as np
-from scipy.optimize import minimize
 
 from patchgen.bench.diagnosis import diagnose
 from patchgen.bench.points import simulate_points
@@ -64,6 +63,8 @@ def least_damped(net: Netlist, plant: PlantParams, bench: BenchProfile,
 
     def rightmost(values) -> float:
         return float(diagnose(net, plant, bench_at(bench, dict(zip(keys, values))))[-1].worst.real)
+
+    from scipy.optimize import minimize  # here, not at import: most benches have no ranges to search
 
     corners = list(itertools.product(*(ranges[k] for k in keys)))  # at most 2^5
     start = max(corners, key=rightmost)

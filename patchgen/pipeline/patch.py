@@ -3,7 +3,7 @@ patch judged as patched on the bench, and its bench prediction for the sheet."""
 
 from __future__ import annotations
 
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 
 from patchgen.bench.diagnosis import as_patched_on_bench
@@ -12,7 +12,8 @@ from patchgen.patch.as_patched import AsPatched
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
-from patchgen.pipeline.prediction import HOLD_RUNS, BenchPrediction, predict_on_bench
+from patchgen.pipeline.prediction import HOLD_RUNS, BenchPrediction
+from patchgen.pipeline.prediction_worker import PredictionWorker
 
 
 @dataclass(frozen=True)
@@ -26,8 +27,8 @@ class PatchPlan:
 @dataclass(frozen=True)
 class PatchReport:
     """The design, its patch, the patch judged as patched (design model and bench), and its bench
-    prediction (None when not asked for), computed in a thread of its own while the patch is
-    rendered: its simulations release the interpreter, the rendering needs it."""
+    prediction (None when not asked for), computed by a worker of its own while the patch is
+    made and rendered (patchgen.pipeline.prediction_worker)."""
 
     design: Design
     netlist: Netlist
@@ -65,12 +66,14 @@ def run_patch(inputs: Inputs, plan: PatchPlan = PatchPlan()) -> PatchReport:
     PatchReport
     """
     spec, machine, bench = inputs
-    d = design_on(spec, machine, bench)
-    net = build_patch(d, machine)
-    judged = as_patched_on_bench(d, net, machine, bench)
-    if not plan.predict:
-        return PatchReport(d, net, judged, None)
-    pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="bench-prediction")
-    pending = pool.submit(predict_on_bench, d, net, machine, bench, plan.runs_hold)
-    pool.shutdown(wait=False)  # the thread ends with the prediction
+    worker = PredictionWorker() if plan.predict else None  # its simulator starts while the patch is made
+    try:
+        d = design_on(spec, machine, bench)
+        net = build_patch(d, machine)
+        judged = as_patched_on_bench(d, net, machine, bench)
+    except BaseException:
+        if worker is not None:
+            worker.cancel()
+        raise
+    pending = None if worker is None else worker.predict(d, net, machine, bench, plan.runs_hold)
     return PatchReport(d, net, judged, pending)

@@ -260,10 +260,15 @@ def output_vectors(net: Netlist) -> list[tuple[str, str]]:
 
 @dataclass(frozen=True)
 class SpiceDeck:
-    """An ngspice deck and the files it reads (the noise table, when noise is on), by name."""
+    """An ngspice deck and the files it reads (the noise table, when noise is on), by name.
+
+    ``output_step_s``: the step at which ngspice writes its solution (interpolated as it runs),
+    or None when it writes every time point it took.
+    """
 
     text: str
     files: dict[str, str] = field(default_factory=dict)
+    output_step_s: float | None = None
 
     def write(self, directory: str | Path) -> Path:
         """Write the deck (patch.cir) and its files into ``directory``; return the deck's path."""
@@ -283,7 +288,8 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     """The patched circuit and the bench as an ngspice deck.
 
     Its .control block runs the transient and writes time, the plant states, u_c, the force and
-    every amplifier output to patch.data. Same inputs and seed, same bytes.
+    every amplifier output to patch.data: at every time point ngspice takes or, when noise is on,
+    at the output step. Same inputs and seed, same bytes.
 
     Parameters
     ----------
@@ -299,7 +305,8 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     Returns
     -------
     SpiceDeck
-        The deck, and its noise table when noise is on.
+        The deck, its noise table when noise is on, and the step it writes at
+        (``output_step_s``; None: ngspice's own time points).
     """
     if machine.id != net.machine:
         raise ValueError(f"netlist is for machine {net.machine!r}, profile is {machine.id!r}")
@@ -326,6 +333,12 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     d.add(f".options method=gear reltol={num(settings.reltol)} abstol=1e-12 vntol=1e-9 "
           f"chgtol=1e-16 itl4=100")
     vecs = " ".join(v for _, v in output_vectors(net))
+    output_step = None
+    if d.noise:  # noise makes ngspice take some 7000 points per second of run: it keeps only the
+        # vectors written and writes them at the output step (its solution, interpolated as it
+        # runs); without noise its own points are few, and they are the ones compared
+        output_step = settings.step_s
+        d.add(f".save {vecs}", ".options interp")
     d.add(".control",
           "set wr_singlescale",
           "set wr_vecnames",
@@ -335,4 +348,4 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
           "quit",
           ".endc",
           ".end")
-    return SpiceDeck("\n".join(d.lines) + "\n", files)
+    return SpiceDeck("\n".join(d.lines) + "\n", files, output_step)

@@ -274,8 +274,11 @@ class SpiceDeck:
         """Write the deck (patch.cir) and its files into ``directory``; return the deck's path."""
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        for name, body in self.files.items():
-            (out / name).write_text(body)
+        chunk = 1 << 20  # characters at a time: the noise table is tens of megabytes, not to be held
+        for name, body in self.files.items():  # again as its encoding
+            with open(out / name, "w") as f:
+                for i in range(0, len(body), chunk):
+                    f.write(body[i:i + chunk])
         (out / DECK_NAME).write_text(self.text)
         return out / DECK_NAME
 

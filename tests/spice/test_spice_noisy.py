@@ -14,6 +14,8 @@ from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import load_inputs, scenario_for
 from patchgen.pipeline.spice import SpicePlan, run_spice, spice_job
 from patchgen.spice.deck import SpiceSettings, output_vectors, spice_deck
+from patchgen.spice.elements import DeckLines
+from patchgen.spice.noise import noise_table
 from patchgen.spice.run import run_ngspice
 
 needs_ngspice = pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not on the PATH")
@@ -90,3 +92,20 @@ def test_the_noisy_check_tells_a_correct_patch_from_a_mis_set_one(job):
     wrong = run_spice(dataclasses.replace(job, deck=broken)).comparison
     assert wrong.signals["theta"].max_rel > 5.0, wrong.lines()
     assert not wrong.agrees(0.1)
+
+
+def test_the_noise_table_is_each_sample_formatted_as_before():
+    """The table written a block at a time is, row by row, time to 9 significant digits and each
+    source's sample to 6, as a per-value format gives them; signed zeros, tiny and large values
+    included, and a block boundary (4096 rows) crossed."""
+    d = DeckLines(np.random.default_rng(3))
+    odd = [-0.0, 1e-300, 123456789.0, -2.5e-5]
+    d.noise.append(("nz_0", 0.001, np.r_[odd, np.random.default_rng(4).normal(0, 1, 5000)]))
+    d.noise.append(("nz_1", 0.004, np.random.default_rng(5).normal(0, 0.01, 1300)))
+    text, dt = noise_table(d, 5.0)
+    t = np.arange(5001) * 0.001
+    cols = [np.interp(t, np.arange(len(v)) * step, v) for _, step, v in d.noise]
+    expected = "".join(f"{ti:.9g} " + " ".join(f"{c[k]:.6g}" for c in cols) + "\n" for k, ti in enumerate(t))
+    assert dt == 0.001 and text == expected
+    assert text.splitlines()[:3] == ["0 -0 " + f"{cols[1][0]:.6g}", "0.001 1e-300 " + f"{cols[1][1]:.6g}",
+                                     "0.002 1.23457e+08 " + f"{cols[1][2]:.6g}"]

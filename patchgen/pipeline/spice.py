@@ -60,12 +60,19 @@ class SpiceReport:
     run_time_s: float
     data: bytes | None
 
+    @property
+    def compared_at(self) -> str:
+        """Where the runs were compared: ngspice's own time points, or (a deck with noise) its
+        solution at the output step."""
+        n, step = len(self.comparison.t), self.job.deck.output_step_s
+        return f"ngspice's {n} time points" if step is None else f"{n} points of ngspice's solution, every {step:g} s"
+
     def summary(self) -> dict:
         """Every figure and the verdict, as plain JSON-able data (comparison.json, --json)."""
         cmp, plan = self.comparison, self.job.plan
         return {"design": self.job.design.spec.name, "scenario": self.job.scenario.name, "ideal": plan.ideal,
                 "tolerance": plan.tolerance, "ngspice_run_time_s": self.run_time_s,
-                "compared_at": f"ngspice's {len(cmp.t)} time points", "opamp_model": OPAMP_MODEL,
+                "compared_at": self.compared_at, "opamp_model": OPAMP_MODEL,
                 "statistical": not plan.ideal,
                 "signals": {k: {"rms_rel": v.rms_rel, "max_rel": v.max_rel, "peak": v.peak}
                             for k, v in cmp.signals.items()},
@@ -97,7 +104,7 @@ def spice_job(inputs: Inputs, scenario: Scenario, plan: SpicePlan) -> SpiceJob:
 
 def run_spice(job: SpiceJob) -> SpiceReport:
     """Run the deck in ngspice and compare with patchgen's own run at every step of its
-    integrator, evaluated at ngspice's time points.
+    integrator, evaluated at the points ngspice wrote (its own, or the output step's).
 
     Raises
     ------

@@ -135,6 +135,14 @@ def _no_bad_numbers(name: str, data: str | bytes) -> None:
     json.loads(data, parse_constant=refuse)
 
 
+def _write_text(path: Path, text: str, chunk: int = 1 << 20) -> None:
+    """Write text as UTF-8 a million characters at a time, so that a file of tens of megabytes (a
+    SPICE noise table) is not held twice, as text and as its encoding."""
+    with open(path, "w", encoding="utf-8") as f:
+        for i in range(0, len(text), chunk):
+            f.write(text[i:i + chunk])
+
+
 def write_files(out_dir: str | Path, files: dict[str, str | bytes], force: bool = False,
                 option: str = "-o") -> list[Path]:
     """Write every file into out_dir, or none: the folder is checked again with the exact names,
@@ -158,7 +166,7 @@ def write_files(out_dir: str | Path, files: dict[str, str | bytes], force: bool 
             if isinstance(data, bytes):
                 p.write_bytes(data)
             else:
-                p.write_text(data, encoding="utf-8")
+                _write_text(p, data)
         if not exists:
             out.parent.mkdir(parents=True, exist_ok=True)
             os.replace(tree, out)

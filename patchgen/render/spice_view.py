@@ -45,7 +45,7 @@ def print_spice(report: SpiceReport, written: list, console: Console | None = No
         add_row(t, k, f"{v.peak:.4g}", f"{100 * v.rms_rel:.3f} % of peak", f"{100 * v.max_rel:.3f} % of peak")
     show(console, t)
     console.print(("[green]agree[/green]" if cmp.agrees(tolerance) else "[red]disagree[/red]")
-                  + f" within {100 * tolerance:g} % of peak at ngspice's {len(cmp.t)} time points; "
+                  + f" within {100 * tolerance:g} % of peak at {report.compared_at}; "
                   f"ngspice ran {report.run_time_s:.2f} s")
     console.print(f"op-amp model: {OPAMP_MODEL}")
     if not ideal:

@@ -1,8 +1,9 @@
-"""ngspice against patchgen's own simulation, at ngspice's own time points: each signal's
+"""ngspice against patchgen's own simulation, at the points ngspice wrote: each signal's
 difference relative to its peak, and an overlay plot.
 
-ngspice writes its solution at the time points it chose; patchgen's reference (recorded at every
-step of its own integrator by ``patchgen spice``) is evaluated there. The plant states s and theta
+ngspice writes its solution at the time points it chose or, with noise on, at the output step
+(patchgen.spice.deck); patchgen's reference (recorded at every step of its own integrator by
+``patchgen spice``) is evaluated there. The plant states s and theta
 are interpolated by cubic Hermite with their own derivatives (s_dot, theta_dot, recorded beside
 them): the error is at most h^4/384 max|d4y/dt4|, below 1e-6 of the peak at the simulator's 10 ms
 ideal step for the loop's motions (up to about 10 rad/s), so what the comparison reports is the
@@ -73,13 +74,14 @@ PLOT_POINTS = 2001  # the overlay plot's points (the comparison itself uses ever
 
 
 def compare(spice_result: Trajectory, own_result: Trajectory, names: Sequence[str] = ("theta", "s")) -> Comparison:
-    """Measure the RMS and largest difference of each named signal at ngspice's own time points
-    (within the span both runs cover), relative to its peak magnitude in ``own_result``.
+    """Measure the RMS and largest difference of each named signal at the time points of
+    ``spice_result`` (within the span both runs cover), relative to its peak magnitude in
+    ``own_result``.
 
     Parameters
     ----------
     spice_result : Trajectory
-        ngspice's run (its own time points).
+        ngspice's run (its own time points, or its solution at the output step).
     own_result : Trajectory
         patchgen's run, interpolated at ngspice's points (cubic Hermite where DERIVATIVE names a
         recorded derivative, else linear).

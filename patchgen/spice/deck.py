@@ -17,7 +17,6 @@ check that a patch sheet is right.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -37,6 +36,7 @@ from patchgen.plant.equations import PLANT_STATES, PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.spice.elements import DeckLines, bound, clamp, num, pot_wiper_position, spice_name, state_integrator
+from patchgen.spice.noise import noise_source, play_noise, random_forces
 from patchgen.spice.plant import (
     CONTROL_NODE,
     FORCE_NODE,
@@ -54,7 +54,6 @@ OPAMP_MODEL = ("finite open-loop DC gain, output resistance, a soft bound at the
                "a few hundred hertz: far below an op-amp's bandwidth), input capacitance and common-mode effects")
 DECK_NAME = "patch.cir"
 DATA_NAME = "patch.data"
-NOISE_NAME = "patch.noise"
 INSTALL_HINT = ("install ngspice (Debian/Ubuntu: apt-get install ngspice) and make sure `ngspice` "
                 "is on the PATH")
 __all__ = ["CONTROL_NODE", "FORCE_NODE", "OPAMP_MODEL", "STATE_NODES", "SpiceDeck", "SpiceSettings", "output_vectors",
@@ -93,42 +92,6 @@ def _amp_out(amp_id: str) -> str:
     return f"{spice_name(amp_id)}_out"
 
 
-def _noise_source(d: DeckLines, name: str, plus: str, minus: str, rms: float, bandwidth_Hz: float,
-                  duration_s: float) -> None:
-    """White noise of the given rms, sampled at twice its bandwidth and joined linearly, as a
-    voltage source ``name`` (an E element) in series between ``minus`` and ``plus``. The samples
-    come from the deck's seeded generator (ngspice's TRNOISE cannot be seeded reproducibly in
-    batch mode) and are played from the noise table by one XSPICE filesource (a PWL source of
-    this length is quadratically slow)."""
-    dt = 0.5 / bandwidth_Hz
-    n = int(math.ceil(duration_s / dt)) + 1
-    d.noise.append((f"nz_{len(d.noise)}", dt, d.rng.normal(0.0, rms, n)))
-    d.add(f"{name} {plus} {minus} {d.noise[-1][0]} 0 1")
-
-
-def _noise_table(d: DeckLines, duration_s: float) -> tuple[str, float]:
-    """The noise samples of every source on one time grid (the finest), and that grid's step."""
-    dt = min(step for _, step, _ in d.noise)
-    t = np.arange(int(math.ceil(duration_s / dt)) + 1) * dt
-    cols = [np.interp(t, np.arange(len(v)) * step, v) for _, step, v in d.noise]
-    rows = [f"{ti:.9g} " + " ".join(f"{c[k]:.6g}" for c in cols) for k, ti in enumerate(t)]
-    return "\n".join(rows) + "\n", dt
-
-
-def _random_forces(d: DeckLines, push: dict[str, str], settings: SpiceSettings) -> dict[str, str]:
-    """The bench's random forces on the cart and at the tip (patchgen.bench.noise_drift), as noise
-    sources added to the scenario's pushes."""
-    levels = settings.noise_and_drift
-    out = dict(push)
-    for key, rms in (("cart", levels.cart_force_N_rms), ("tip", levels.tip_force_N_rms)):
-        if rms > 0:
-            d.comment(f"Random force on the {key}: {rms:g} N rms to {levels.force_bandwidth_Hz:g} Hz")
-            _noise_source(d, f"E_force_{key}_noise", f"fz_{key}", "0", rms, levels.force_bandwidth_Hz,
-                          settings.duration_s)
-            out[key] = "+".join(p for p in (push[key], f"v(fz_{key})") if p)
-    return out
-
-
 def _sensors(d: DeckLines, net: Netlist, bench: BenchProfile, machine: MachineProfile,
              settings: SpiceSettings) -> None:
     """Sensor voltage = bench sensor constant x state, limited (smoothly) at the machine reference:
@@ -154,7 +117,7 @@ def _sensors(d: DeckLines, net: Netlist, bench: BenchProfile, machine: MachinePr
         volts = clamp(f"{num(k)}*{state}", machine.reference_V)
         d.add(f"B_sens_{spice_name(s.id)} {clean} 0 V = {volts}")
         if rms > 0:
-            _noise_source(d, f"E_sens_{spice_name(s.id)}_noise", node, clean, rms,
+            noise_source(d, f"E_sens_{spice_name(s.id)}_noise", node, clean, rms,
                           levels.sensor_bandwidth_Hz, settings.duration_s)
 
 
@@ -212,7 +175,7 @@ def _amplifier(d: DeckLines, net: Netlist, reading: Reading, amp: Amplifier, mac
           f"R_{n}_o {core} {fb} {num(max(c.opamp_output_resistance_ohm, 1e-3))}",
           f"B_{n}_bound {fb} {sj} I = {bound(f'v({fb})', vsat, c.feedback_resistor_ohm)}")
     if rms > 0:
-        _noise_source(d, f"E_{n}_noise", out, fb, rms, levels.amplifier_bandwidth_Hz, settings.duration_s)
+        noise_source(d, f"E_{n}_noise", out, fb, rms, levels.amplifier_bandwidth_Hz, settings.duration_s)
     if offset:
         d.add(f"V_{n}_offset {plus} 0 DC {num(offset)}")
     if bias:
@@ -297,17 +260,25 @@ def output_vectors(net: Netlist) -> list[tuple[str, str]]:
 
 @dataclass(frozen=True)
 class SpiceDeck:
-    """An ngspice deck and the files it reads (the noise table, when noise is on), by name."""
+    """An ngspice deck and the files it reads (the noise table, when noise is on), by name.
+
+    ``output_step_s``: the step at which ngspice writes its solution (interpolated as it runs),
+    or None when it writes every time point it took.
+    """
 
     text: str
     files: dict[str, str] = field(default_factory=dict)
+    output_step_s: float | None = None
 
     def write(self, directory: str | Path) -> Path:
         """Write the deck (patch.cir) and its files into ``directory``; return the deck's path."""
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        for name, body in self.files.items():
-            (out / name).write_text(body)
+        chunk = 1 << 20  # characters at a time: the noise table is tens of megabytes, not to be held
+        for name, body in self.files.items():  # again as its encoding
+            with open(out / name, "w") as f:
+                for i in range(0, len(body), chunk):
+                    f.write(body[i:i + chunk])
         (out / DECK_NAME).write_text(self.text)
         return out / DECK_NAME
 
@@ -317,9 +288,29 @@ class SpiceDeck:
 
 def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
                settings: SpiceSettings) -> SpiceDeck:
-    """The patched circuit and the bench as an ngspice deck, with a .control block that runs the
-    transient and writes time, the plant states, u_c, the force and every amplifier output to
-    patch.data. Same inputs and seed, same bytes."""
+    """The patched circuit and the bench as an ngspice deck.
+
+    Its .control block runs the transient and writes time, the plant states, u_c, the force and
+    every amplifier output to patch.data: at every time point ngspice takes or, when noise is on,
+    at the output step. Same inputs and seed, same bytes.
+
+    Parameters
+    ----------
+    net : Netlist
+        The patch, as wired.
+    plant : PlantParams
+        The cart-pendulum.
+    bench, machine : BenchProfile, MachineProfile
+        The sensors, actuator and track; the machine's components and imperfections.
+    settings : SpiceSettings
+        Duration, output step, initial state, noise and drift, actuator, disturbances.
+
+    Returns
+    -------
+    SpiceDeck
+        The deck, its noise table when noise is on, and the step it writes at
+        (``output_step_s``; None: ngspice's own time points).
+    """
     if machine.id != net.machine:
         raise ValueError(f"netlist is for machine {net.machine!r}, profile is {machine.id!r}")
     reading = read(net, machine.imperfections.differentiator_rolloff_s)  # checks the wiring, too
@@ -335,27 +326,22 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     d.comment(f"Control voltage u_c = output of {reading.output}")
     d.add(f"V_uc {CONTROL_NODE} {_source_node(reading, reading.output)} DC 0")
     actuator(d, plant, bench, settings.actuator == "ideal")
-    pushes = _random_forces(d, disturbances(d, settings.disturbances), settings)
+    pushes = random_forces(d, disturbances(d, settings.disturbances), levels, settings.duration_s)
     cart_pendulum(d, with_rotor(plant, motor_of(bench.actuator)), settings.x0, pushes)
 
     max_step = settings.max_step_s or settings.step_s
-    files: dict[str, str] = {}
-    if d.noise:
-        table, dt = _noise_table(d, settings.duration_s)
-        files[NOISE_NAME] = table
-        max_step = min(max_step, dt)  # the filesource sets no breakpoints: do not step over samples
-        nodes = " ".join(name for name, _, _ in d.noise)
-        ones = " ".join("1" for _ in d.noise)
-        zeros = " ".join("0" for _ in d.noise)
-        d.comment(f"Noise samples (seed {settings.seed}), one column per source, from {NOISE_NAME}")
-        d.add(f"A_noise [{nodes}] noise_table",
-              f'.model noise_table filesource (file="{NOISE_NAME}" amploffset=[{zeros}] '
-              f"amplscale=[{ones}] timeoffset=0 timescale=1 timerelative=false amplstep=false)")
-        d.add(*(f"R_{name} {name} 0 1e6" for name, _, _ in d.noise))
+    files, dt = play_noise(d, settings.seed, settings.duration_s)
+    max_step = min(max_step, dt)  # the filesource sets no breakpoints: do not step over samples
     d.add(".ic " + " ".join(f"v({node})={num(v)}" for node, v in sorted(d.ics.items())))
     d.add(f".options method=gear reltol={num(settings.reltol)} abstol=1e-12 vntol=1e-9 "
           f"chgtol=1e-16 itl4=100")
     vecs = " ".join(v for _, v in output_vectors(net))
+    output_step = None
+    if d.noise:  # noise makes ngspice take some 7000 points per second of run: it keeps only the
+        # vectors written and writes them at the output step (its solution, interpolated as it
+        # runs); without noise its own points are few, and they are the ones compared
+        output_step = settings.step_s
+        d.add(f".save {vecs}", ".options interp")
     d.add(".control",
           "set wr_singlescale",
           "set wr_vecnames",
@@ -365,4 +351,4 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
           "quit",
           ".endc",
           ".end")
-    return SpiceDeck("\n".join(d.lines) + "\n", files)
+    return SpiceDeck("\n".join(d.lines) + "\n", files, output_step)

@@ -92,14 +92,26 @@ def run_ngspice(deck: SpiceDeck | str, workdir: str | Path, timeout_s: float = 6
 
 
 def read_wrdata(path: str | Path, names: Sequence[tuple[str, str]] | None = None) -> SpiceResult:
-    """Parse a wrdata table written with wr_singlescale and wr_vecnames.
+    """Parse a wrdata table written with wr_singlescale and wr_vecnames, streaming from the file
+    (no copy of its text is held: it may be hundreds of megabytes).
 
-    Columns are mapped back to signal names: v(x_s) -> s, v(u_c) -> u_c, v(a6_out) -> A6 (upper
-    case amplifier ids as ngspice lower-cases node names; pass ``names`` to map exactly).
+    Parameters
+    ----------
+    path : str or Path
+        The table: a header of vector names, then a row per time point.
+    names : sequence of (str, str), optional
+        (signal name, ngspice vector) pairs to map the columns exactly; otherwise v(x_s) -> s,
+        v(u_c) -> u_c, v(a6_out) -> A6 (upper case amplifier ids, as ngspice lower-cases node
+        names).
+
+    Returns
+    -------
+    SpiceResult
+        Time and every column by signal name.
     """
-    lines = Path(path).read_text().splitlines()
-    header = lines[0].split()
-    table = np.loadtxt(lines[1:], ndmin=2)
+    with open(path) as f:
+        header = f.readline().split()
+        table = np.loadtxt(f, ndmin=2)
     if table.shape[1] != len(header):
         raise NgspiceError(f"{path}: {table.shape[1]} columns for {len(header)} names")
     by_vec = {(v.lower()): k for k, v in names} if names else {}

@@ -101,3 +101,12 @@ def test_a_file_as_the_folder_or_on_its_way_is_refused(tmp_path):
         check_out_dir(f / "below" / "out", option="--out")
     assert check_out_dir(tmp_path / "fresh", ["x.csv"]) == tmp_path / "fresh"
     assert not (tmp_path / "fresh").exists()  # the check creates nothing
+
+
+def test_a_long_text_is_written_whole_across_its_chunks(tmp_path):
+    # 2.8 million characters, two bytes each for the accents: written a million characters at a
+    # time, the file is the text's UTF-8 encoding exactly
+    text = "é, 1.25e-05 -0 é\n" * 165_000
+    write_files(tmp_path / "o", {"big.txt": text, "small.txt": "x\n"})
+    assert (tmp_path / "o" / "big.txt").read_bytes() == text.encode("utf-8")
+    assert (tmp_path / "o" / "small.txt").read_bytes() == b"x\n"

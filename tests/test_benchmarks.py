@@ -186,8 +186,9 @@ def test_json_result_shape(monkeypatch, capsys):
     assert result["repeats"] == 2 and len(result["load_before"]) == len(result["load_after"]) == 3
     (row,) = result["rows"]
     assert set(row) == {"name", "command", "in_table", "target_wall_s", "target_peak_mib", "wall_s", "cpu_s",
-                        "peak_mib", "load_after", "missed", "pass"}
+                        "peak_mib", "load_after", "missed", "pass", "refused"}
     assert (row["name"], row["command"], row["target_wall_s"]) == ("design", "patchgen design bench-recommended", 0.5)
+    assert row["refused"] is False
     for figure in ("wall_s", "cpu_s", "peak_mib"):
         assert set(row[figure]) == {"min", "median", "max", "runs"} and len(row[figure]["runs"]) == 2
     assert status == (0 if result["pass"] else 1) and result["pass"] == row["pass"]
@@ -204,3 +205,16 @@ def test_benchmark_imports_exist(script):
             for alias in node.names:
                 submodule = hasattr(module, "__path__") and importlib.util.find_spec(f"{node.module}.{alias.name}")
                 assert hasattr(module, alias.name) or submodule, f"{script}: {node.module} has no {alias.name}"
+
+
+def test_a_patch_row_times_a_refusal_and_says_so(tmp_path):
+    """A design its machine cannot hold ends in one line and exit 2: a completed run, marked refused;
+    any other failure, or a refusal where none is allowed, stops the benchmark."""
+    row = next(r for r in latency.rows() if r.name == "patch-thesis-case1-noint")
+    sample = latency.run_once(row)
+    assert sample.refused and sample.wall_s > 0
+    res = latency.Result(row, [sample])
+    assert "refused" in latency.table_line(res) and res.as_dict()["refused"]
+    strict = latency.Row("strict", row.args, 1.5, writes=row.writes)
+    with pytest.raises(latency.RunFailed):
+        latency.run_once(strict)

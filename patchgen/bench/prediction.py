@@ -17,6 +17,23 @@ from patchgen.profiles.machine import MachineProfile
 STANDARD = STANDARD_SCENARIOS  # every shipped scenario: a bench's default set (profiles.bench.bench_scenarios)
 
 
+SPLIT_RUNS = 8  # the fewest runs of a part of a small Monte Carlo run on a thread of its own
+SPLIT_BELOW = 64  # runs from which the engine's own blocks fill the cores (patchgen.bench.engine.plan_blocks)
+
+
+def _side_by_side(run, runs: int) -> list:
+    """``run(first, n)``'s runs first .. first + n - 1 for runs 0 .. runs - 1, a few parts at once on
+    the cores when the Monte Carlo is small (20 runs: two of 10); a run depends on its index alone,
+    so the list is the one a single call gives."""
+    parts = min(numba.get_num_threads(), runs // SPLIT_RUNS) if runs < SPLIT_BELOW else 1
+    if parts <= 1:
+        return run(0, runs)
+    bounds = [runs * k // parts for k in range(parts + 1)]
+    with ThreadPoolExecutor(parts) as pool:
+        chunks = list(pool.map(lambda k: run(bounds[k], bounds[k + 1] - bounds[k]), range(parts)))
+    return [r for chunk in chunks for r in chunk]
+
+
 @dataclass(frozen=True)
 class Prediction:
     """One standard scenario on the bench: the fraction of runs held, run 0's events, the worst
@@ -68,8 +85,9 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
         if done is not None and len(done.get(name, ())) >= runs:
             summaries = done[name][:runs]
         else:
-            summaries = simulate(net, plant, bench, machine, sc, runs=runs, keep_history=False,
-                                 bench_spread=bench_spread).runs
+            summaries = _side_by_side(lambda first, n: simulate(net, plant, bench, machine, sc, runs=n, first_run=first,
+                                                                keep_history=False, bench_spread=bench_spread).runs,
+                                      runs)
         r0 = summaries[0]
         ovl = sorted({o.amplifier for run in summaries for o in run.overloads})
         return Prediction(name, sc.description, runs, sum(r.held for r in summaries) / runs, r0.trip_time_s,

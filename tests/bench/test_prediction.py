@@ -93,3 +93,23 @@ def test_the_banner_names_each_failing_scenario(patch):
     assert not pred.holds and pred.failing == (failed,)
     assert failure_banner("uw-1991", pred) == ("Predicted to fail on the uw-1991 bench: held in step-cart 90 % of "
                                                "runs. See 'Predicted on the bench'.")
+
+
+def test_a_small_hold_run_in_parts_is_the_hold_run_whole(patch):
+    """The hold's 20 runs, two parts of 10 on two threads, are the 20 runs of one call, in order."""
+    import numba
+
+    from patchgen.bench.prediction import _side_by_side
+
+    assert _side_by_side(lambda first, n: list(range(first, first + n)), 20) == list(range(20))
+    net, plant = patch
+    sc = load_scenario("hold-120s").model_copy(update={"duration_s": 3.0})
+    whole = simulate(net, plant, BENCH, GP6, sc, runs=20, keep_history=False).runs
+    threads = numba.get_num_threads()
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+    try:
+        parts = _side_by_side(lambda first, n: simulate(net, plant, BENCH, GP6, sc, runs=n, first_run=first,
+                                                        keep_history=False).runs, 20)
+    finally:
+        numba.set_num_threads(threads)
+    assert parts == whole and [r.run for r in parts] == list(range(20))

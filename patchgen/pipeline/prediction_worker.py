@@ -7,14 +7,18 @@ simulates while this one renders. The prediction is the same: the worker runs
 patchgen.pipeline.prediction.predict_on_bench on the same inputs, and its result (or its error)
 comes back through the future.
 
-Forking is Linux's way (the worker starts from this process as it is, nothing imported twice);
-elsewhere, or when no process can be started, the prediction runs in a thread of this process.
+Forking is Linux's way (the worker starts from this process as it is, nothing imported twice),
+and it is taken only from a process of one thread, as the command line is: forking copies the
+calling thread alone, and a lock another thread held would stay held in the worker. Elsewhere
+(another system, a program or notebook with threads of its own, or no process to be had) the
+prediction runs in a thread of this process.
 """
 
 from __future__ import annotations
 
 import multiprocessing
 import sys
+import threading
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor
 
 from patchgen.design.lqg import Design
@@ -41,7 +45,7 @@ class PredictionWorker:
 
     def __init__(self) -> None:
         self._pool: Executor
-        if sys.platform.startswith("linux"):
+        if sys.platform.startswith("linux") and threading.active_count() == 1:
             try:
                 self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"),
                                                  initializer=_start_simulator)

@@ -33,3 +33,46 @@ def test_a_bench_with_ranges_is_predicted_at_its_corners_too():
     assert pred.corners is not None and pred.corners.scenario == "hold-120s"
     assert set(pred.corners.ranges) == set(inputs.bench.uncertainty.ranges) or pred.corners.at_nominal
     assert pred.summary()["bench_spread"] == pred.corners.as_dict()
+
+
+def test_the_prediction_is_the_same_from_a_worker_process_and_a_thread():
+    """The sheet's prediction made by a forked worker (a process of one thread, as the command line
+    is) and by a thread (any other process) is the same prediction; with a thread of its own
+    running, the worker is a thread."""
+    import concurrent.futures
+    import threading
+
+    from patchgen.pipeline.prediction_worker import PredictionWorker
+
+    inputs = load_inputs("bench-recommended")
+    report = run_patch(inputs, PatchPlan(predict=False))
+    args = (report.design, report.netlist, inputs.machine, inputs.bench, 4)
+    forked = concurrent.futures.ProcessPoolExecutor  # what the worker starts from a one-thread process
+    results = {}
+    for label in ("alone", "with a thread"):
+        stop = threading.Event()
+        other = threading.Thread(target=stop.wait) if label == "with a thread" else None
+        if other is not None:
+            other.start()
+        try:
+            worker = PredictionWorker()
+            results[label] = (isinstance(worker._pool, forked), worker.predict(*args).result().summary())
+        finally:
+            stop.set()
+            if other is not None:
+                other.join()
+    assert results["with a thread"][0] is False
+    assert results["alone"][0] is (threading.active_count() == 1 and __import__("sys").platform.startswith("linux"))
+    assert results["alone"][1] == results["with a thread"][1]
+    assert results["alone"][1]["runs_hold"] == 4 and len(results["alone"][1]["scenarios"]) == 4
+
+
+def test_the_command_lines_process_forks_its_worker():
+    """A process of one thread, as patchgen's command line is, on Linux: the worker is a process."""
+    import subprocess
+    import sys
+
+    code = ("import concurrent.futures as c; from patchgen.pipeline.prediction_worker import PredictionWorker; "
+            "w = PredictionWorker(); print(isinstance(w._pool, c.ProcessPoolExecutor)); w.cancel()")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == str(sys.platform.startswith("linux"))

@@ -7,8 +7,9 @@ from dataclasses import dataclass
 
 import numba
 
+from patchgen.bench.engine import SPLIT_FROM
 from patchgen.bench.simulate import RunSummary, simulate
-from patchgen.inputs.scenario import load_scenario
+from patchgen.inputs.scenario import Scenario, load_scenario
 from patchgen.patch.netlist import Netlist
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import STANDARD_SCENARIOS, BenchProfile, bench_scenarios
@@ -18,14 +19,15 @@ STANDARD = STANDARD_SCENARIOS  # every shipped scenario: a bench's default set (
 
 
 SPLIT_RUNS = 8  # the fewest runs of a part of a small Monte Carlo run on a thread of its own
-SPLIT_BELOW = 64  # runs from which the engine's own blocks fill the cores (patchgen.bench.engine.plan_blocks)
 
 
 def _side_by_side(run, runs: int) -> list:
     """``run(first, n)``'s runs first .. first + n - 1 for runs 0 .. runs - 1, a few parts at once on
     the cores when the Monte Carlo is small (20 runs: two of 10); a run depends on its index alone,
     so the list is the one a single call gives."""
-    parts = min(numba.get_num_threads(), runs // SPLIT_RUNS) if runs < SPLIT_BELOW else 1
+    threads = numba.get_num_threads()
+    # from SPLIT_FROM runs a thread, the engine's own blocks fill the cores (plan_blocks)
+    parts = min(threads, runs // SPLIT_RUNS) if runs < SPLIT_FROM * threads else 1
     if parts <= 1:
         return run(0, runs)
     bounds = [runs * k // parts for k in range(parts + 1)]
@@ -78,8 +80,7 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
     list of Prediction
         One per scenario, in order.
     """
-    def one(given: str) -> Prediction:
-        sc = load_scenario(given)
+    def one(sc: Scenario) -> Prediction:
         name = sc.name  # a file's stem, or the name it gives itself
         runs = runs_hold if name == "hold-120s" else 1
         if done is not None and len(done.get(name, ())) >= runs:
@@ -94,9 +95,9 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
                           r0.fall_time_s, max(x.max_abs_theta_deg for x in summaries),
                           max(x.max_abs_s_m for x in summaries), ", ".join(ovl) or "none")
 
-    given = list(scenarios or bench_scenarios(bench))
+    loaded = [load_scenario(given) for given in scenarios or bench_scenarios(bench)]
     # side by side, the long hold first, so that the short scenarios fill the other cores
-    order = sorted(range(len(given)), key=lambda i: load_scenario(given[i]).name != "hold-120s")
-    with ThreadPoolExecutor(max(1, min(len(given), numba.get_num_threads()))) as pool:
-        futures = {i: pool.submit(one, given[i]) for i in order}
-        return [futures[i].result() for i in range(len(given))]
+    order = sorted(range(len(loaded)), key=lambda i: loaded[i].name != "hold-120s")
+    with ThreadPoolExecutor(max(1, min(len(loaded), numba.get_num_threads()))) as pool:
+        futures = {i: pool.submit(one, loaded[i]) for i in order}
+        return [futures[i].result() for i in range(len(loaded))]

@@ -51,7 +51,7 @@ from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
 
 COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "f02fcd4b96b19a76"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_IN = "a3e889d0deb42c12"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 128  # runs per block (fewer, and the per-step work that is not per lane weighs more)
 PAD = 16  # a block computes a multiple of this many lanes: four AVX2 registers of four lanes
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
@@ -192,7 +192,8 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     k0 = np.empty(nl, dtype=np.uint64)
     k1 = np.empty(nl, dtype=np.uint64)
     drift = np.empty((na, nl))  # each integrating amplifier drifts one way, drawn per run
-    ra, rx, rf, r_force, r_limit, n_int = state_rows(na)
+    ra, rx, rf, r_force, r_limit = state_rows(na)
+    n_int = r_force  # the integrated states: the rows before the force's
     # the integrated states, rows of one array, and each RK4 stage's (patchgen.bench.lanes.state_rows)
     state, staged = np.zeros((n_int, nl)), np.zeros((n_int, nl))
     xp, za, xa, xf = state[:ra], state[ra:rx], state[rx], state[rf:r_force]  # xf: the velocity filter's

@@ -87,11 +87,11 @@ def _partial(j, wiring, sig, acc):
 
 @nb.njit(**_JIT)
 def state_rows(na):
-    """(first amplifier, actuator, first filter, force, at-limit) rows of the slopes, and how
-    many of them are integrated states, for na amplifiers (see P_ROWS)."""
+    """(first amplifier, actuator, first filter, force, at-limit) rows of the slopes for na
+    amplifiers (see P_ROWS); the rows before the force's are the integrated states."""
     act = P_ROWS + na
     force = act + 1 + FILTER_ROWS
-    return P_ROWS, act, act + 1, force, force + 1, force
+    return P_ROWS, act, act + 1, force, force + 1
 
 
 @nb.njit(inline="always", **_JIT)

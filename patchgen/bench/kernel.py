@@ -126,7 +126,10 @@ class Noise(NamedTuple):
 
 
 class Wiring(NamedTuple):
-    """The compiled circuit (patchgen.bench.circuit.Circuit's arrays) and each amplifier's drift."""
+    """The compiled circuit (patchgen.bench.circuit.Circuit's arrays) and each amplifier's drift.
+    The loop sums inputs from the groups; the plain input list (in_ptr, in_src, in_gain) stays for
+    what reads the circuit as patched, the per-run reference loop of tests/bench among them, which
+    so checks the grouping rather than sharing it."""
 
     kind: np.ndarray
     in_ptr: np.ndarray

@@ -15,8 +15,8 @@ engine as one batch (patchgen.bench.points), on every core.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, replace
 
 import numba
 import numpy as np
@@ -34,7 +34,7 @@ from patchgen.studies import worst_case
 from patchgen.studies.ranking import ScenarioOutcome, outcome
 
 MAX_CORNER_PARAMETERS = 6  # 64 corners: corner_values's cap (the study itself searches past EXACT_RANGES)
-CORNERS_A_CORE = 2  # corners of a stopped study run at once, per core (see study)
+CORNERS_A_CORE = 2  # corners run at once per core by a study in steps (see study_in_steps)
 
 
 @dataclass(frozen=True)
@@ -137,8 +137,8 @@ def _worst_swing(runs: Sequence[RunSummary], saturation_V: float) -> float:
 
 def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile, scenario: Scenario,
           *, seed: int | None = None, corner_runs: int, drawn: SimResult | None = None, ends: bool = False,
-          ideal: bool = False, stop: Callable[[list[CornerOutcome]], bool] | None = None,
-          known: Sequence[CornerOutcome] = (), progress: Callable[[int, int], None] | None = None) -> BenchStudy:
+          ideal: bool = False, known: Sequence[CornerOutcome] = (),
+          progress: Callable[[int, int], None] | None = None) -> BenchStudy:
     """The patch at every corner of the bench's ranges (and each end of each range, if asked).
 
     Parameters
@@ -161,62 +161,92 @@ def study(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Machin
         Also run each end of each range, the others at the profile's values (the weakest parameter).
     ideal : bool
         Every imperfection off (only the ranges an ideal run feels).
-    stop : callable, optional
-        ``stop(corners so far)`` after each corner: True ends the study there (a search's
-        candidate already beaten; the study may then have fewer corners than the box).
     known : sequence of CornerOutcome, optional
         Corners already run with these very inputs (the same patch, plant, bench, machine,
         scenario, seed, runs and mode: the robust search's): taken as they are, not run again.
     progress : callable, optional
-        ``progress(done, total)`` after each corner or end.
+        ``progress(done, total)`` after the corners and after the ends.
 
     Returns
     -------
     BenchStudy
     """
-    ranges = active_ranges(bench, ideal, scenario.noise.mode == "profile")
-    sat = machine.imperfections.saturation_V
-    counted = None if drawn is None else outcome(scenario.name, drawn.runs, _worst_swing(drawn.runs, sat))
+    box = _Box(net, plant, bench, machine, scenario, seed, corner_runs, ideal)
+    counted = None if drawn is None else outcome(scenario.name, drawn.runs, box.worst_swing(drawn.runs))
+    if box.searched:
+        return replace(box.search(progress, ends), drawn=counted)
+    singles = [{k: v} for k, r in box.ranges.items() for v in r] if ends else []
+    total = len(box.corners) + len(singles)
+    corners = box.batch(box.corners, known)  # every corner at once
+    if progress is not None:
+        progress(len(corners), total)
+    done_ends = box.batch(singles, known)
+    if progress is not None and singles:
+        progress(total, total)
+    return BenchStudy(scenario.name, box.ranges, bench.uncertainty.distribution, counted, tuple(corners), box.rest,
+                      tuple(done_ends))
 
-    def counted_at(values: dict, runs: list[RunSummary]) -> CornerOutcome:
-        return CornerOutcome(values, outcome(scenario.name, runs, _worst_swing(runs, sat)))
 
-    if len(ranges) > worst_case.EXACT_RANGES:
-        confirmed, screened_ends, screened = worst_case.search(
-            net, plant, bench, machine, scenario, ranges, seed=seed, corner_runs=corner_runs, ideal=ideal,
-            progress=progress)
-        return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
-                          tuple(counted_at(v, r) for v, r in confirmed), (),
-                          tuple(counted_at(v, r) for v, r in screened_ends) if ends else (), screened)
-    corners, rest = corner_values(bench, ranges)
-    singles = [{k: v} for k, r in ranges.items() for v in r] if ends else []
-    total = len(corners) + len(singles)
+def study_in_steps(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
+                   scenario: Scenario, *, seed: int | None = None, corner_runs: int,
+                   ideal: bool = False) -> Iterator[tuple[BenchStudy, bool]]:
+    """The corners of :func:`study` (no ends, no drawn runs) a few at a time, in the box's order:
+    each step yields the study so far and whether it is whole (the last step's: the same as
+    :func:`study`'s).
 
-    def batch(points: list[dict]) -> list[CornerOutcome]:
+    A search that can drop a patch on its first corners (patchgen.studies.robust) asks for the next
+    step only while it needs it. A step runs CORNERS_A_CORE corners a core at once: the robust
+    search's corners of 64 runs then fill blocks of 128 (an engine run-step costs less in a full
+    block than the corner a dropped patch computes for nothing: recommend over uw-1991-uncertain
+    15.7 s against 16.4 a corner at a time). Past worst_case.EXACT_RANGES ranges the searched
+    study is one step.
+    """
+    box = _Box(net, plant, bench, machine, scenario, seed, corner_runs, ideal)
+    if box.searched:
+        yield box.search(None, False), True
+        return
+    group = max(1, CORNERS_A_CORE * numba.get_num_threads())
+    done: list[CornerOutcome] = []
+    for i in range(0, len(box.corners), group):
+        done += box.batch(box.corners[i:i + group], ())
+        yield (BenchStudy(scenario.name, box.ranges, bench.uncertainty.distribution, None, tuple(done), box.rest),
+               len(done) == len(box.corners))
+
+
+class _Box:
+    """One patch and scenario at points of the bench's box of ranges: the ranges it feels, its
+    corners, and batches of points run on the engine."""
+
+    def __init__(self, net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
+                 scenario: Scenario, seed: int | None, corner_runs: int, ideal: bool):
+        self.args = (net, plant, bench, machine, scenario)
+        self.seed, self.corner_runs, self.ideal = seed, corner_runs, ideal
+        self.ranges = active_ranges(bench, ideal, scenario.noise.mode == "profile")
+        self.sat = machine.imperfections.saturation_V
+        self.searched = len(self.ranges) > worst_case.EXACT_RANGES
+        self.corners, self.rest = ([], ()) if self.searched else corner_values(bench, self.ranges)
+
+    def worst_swing(self, runs: Sequence[RunSummary]) -> float:
+        """The largest |u_c| of the runs (the rails when any overloaded)."""
+        return _worst_swing(runs, self.sat)
+
+    def counted(self, values: dict, runs: list[RunSummary]) -> CornerOutcome:
+        """The runs at one point as a CornerOutcome."""
+        return CornerOutcome(values, outcome(self.args[4].name, runs, self.worst_swing(runs)))
+
+    def batch(self, points: list[dict], known: Sequence[CornerOutcome]) -> list[CornerOutcome]:
         """The points' outcomes: those in ``known`` as they are, the rest run in one batch (every core)."""
         todo = [v for v in points if not any(k.values == v for k in known)]
-        ran = iter(simulate_points(net, plant, bench, machine, scenario, todo, runs=corner_runs, seed=seed,
-                                   ideal=ideal) if todo else [])
-        return [next((k for k in known if k.values == v), None) or counted_at(v, next(ran)) for v in points]
+        ran = iter(simulate_points(*self.args, todo, runs=self.corner_runs, seed=self.seed, ideal=self.ideal)
+                   if todo else [])
+        return [next((k for k in known if k.values == v), None) or self.counted(v, next(ran)) for v in points]
 
-    # every corner at once; with a stop, a few at once and stop asked after each, as if each ran
-    # alone: the study ends at the same corner. Two a core: the robust search's corners of 64 runs
-    # then fill blocks of 128 (an engine run-step costs less in a full block than the corner a
-    # stopped study computes for nothing: recommend over uw-1991-uncertain 15.7 s against 16.4)
-    group = len(corners) if stop is None else max(1, CORNERS_A_CORE * numba.get_num_threads())
-    done_corners: list[CornerOutcome] = []
-    for i in range(0, len(corners), group):
-        for c in batch(corners[i:i + group]):
-            done_corners.append(c)
-            if progress is not None:
-                progress(len(done_corners), total)
-            if stop is not None and stop(done_corners):
-                break
-        else:
-            continue
-        break
-    done_ends = batch(singles)
-    if progress is not None and singles:
-        progress(len(done_corners) + len(done_ends), total)
-    return BenchStudy(scenario.name, ranges, bench.uncertainty.distribution, counted,
-                      tuple(done_corners), rest, tuple(done_ends))
+    def search(self, progress: Callable[[int, int], None] | None, ends: bool) -> BenchStudy:
+        """The study past EXACT_RANGES ranges: the worst corner searched for (patchgen.studies.worst_case)."""
+        bench, scenario = self.args[2], self.args[4]
+        confirmed, screened_ends, screened = worst_case.search(
+            *self.args, self.ranges, seed=self.seed, corner_runs=self.corner_runs, ideal=self.ideal,
+            progress=progress)
+        return BenchStudy(scenario.name, self.ranges, bench.uncertainty.distribution, None,
+                          tuple(self.counted(v, r) for v, r in confirmed), (),
+                          tuple(self.counted(v, r) for v, r in screened_ends) if ends else (), screened)

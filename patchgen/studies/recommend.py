@@ -38,6 +38,7 @@ its departures from the spec (patchgen.studies.departures), so the one chosen na
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
@@ -72,6 +73,7 @@ CANDIDATES = (
 RUNS = 200  # the most noise seeds per candidate and scenario
 DESIGNING = "designing and allocating every realisation"  # the first thing progress hears
 CORNER_RUNS = 64  # seeds at each corner and each end of the bench's ranges
+CANDIDATES_AT_ONCE = 1  # candidates simulated side by side, per core (_Runner)
 
 def candidate_specs(spec: DesignSpec, bench: BenchProfile) -> list[tuple[str, str, DesignSpec]]:
     """The spec with each estimator kind (plant, weights, integrators unchanged), each wired as its
@@ -296,7 +298,7 @@ def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, sc
     rec = _ranked(spec, scenarios, runs, seed, done, bench)
     if rec.best is None and bench.uncertainty.ranges:  # gains chosen over the corners, when none holds there
         robust_why = {"weights": f"{robust.LABEL}: {robust.WHY_GAINS}", "integrators.int_s": robust.LABEL}
-        where = (lambda i, n: progress(f"{robust.LABEL}: weights {i} of {n} over the corners", run.base,
+        where = (lambda i, n: progress(f"{robust.LABEL}: weights over the corners, {i} of {n} ruled out or chosen", run.base,
                                        run.total)) if progress else None
         done += run([departed(c, spec, bench, robust_why)
                      for c in extra_candidates(spec, machine, bench, scenarios, seed, where)])
@@ -333,32 +335,47 @@ def _tier_candidates(tier: list[variants.Variant], spec: DesignSpec, machine: Ma
 
 
 class _Runner:
-    """Simulates candidates in order, reporting progress over every candidate run so far (a
-    call's candidates add their most runs to the total)."""
+    """Simulates candidates, a few side by side (CANDIDATES_AT_ONCE a core), reporting progress
+    over every candidate run so far (a call's candidates add their most runs to the total).
+
+    A candidate's figures depend on its seeds alone, so they are the same however many run at
+    once; running two keeps both cores busy while one candidate's round waits on its longest
+    scenario, which runs alone."""
 
     def __init__(self, bench: BenchProfile, machine: MachineProfile, scenarios: Sequence[Scenario], runs: int,
                  seed: int | None, early_stop: bool, progress: Callable[[str, int, int], None] | None):
         self.args = (bench, machine, scenarios, runs, seed, early_stop)
         self.progress, self.per, self.base, self.total = progress, runs * len(scenarios), 0, 0
+        self.lock = threading.Lock()
 
     def __call__(self, cands: list[Candidate]) -> list[Candidate]:
         bench, machine, scenarios, runs, seed, early_stop = self.args
-        progress = self.progress
-        total = self.total = self.base + self.per * sum(c.netlist is not None for c in cands)
-        done = []
-        for c in cands:
-            if c.netlist is None:
-                done.append(c)
-                continue
-            cb = (lambda n, lab=c.label, b=self.base: progress(lab, b + n, total)) if progress else None
-            after = self.base + self.per  # the candidate's Monte Carlo is over when its corners run
-            ph = (lambda what, d, t, lab=c.label, b=after: progress(f"{lab}: {what}, batch {d} of {t}", b, total)
-                  ) if progress else None
-            done.append(evaluate(c, bench, machine, scenarios, runs, seed, early_stop, cb, ph))
-            self.base += self.per
+        progress, per, base = self.progress, self.per, self.base
+        total = self.total = base + per * sum(c.netlist is not None for c in cands)
+        done_of: dict[int, int] = {}  # runs done of each candidate under way or finished
+
+        def report(i: int, label: str, n: int) -> None:
+            with self.lock:
+                done_of[i] = n
+                progress(label, base + sum(done_of.values()), total)
+
+        def one(i: int, c: Candidate) -> Candidate:
+            cb = ph = None
             if progress is not None:
-                progress(c.label, self.base, total)
-        return done
+                cb = lambda n: report(i, c.label, n)  # noqa: E731
+                # the candidate's Monte Carlo is over when its corners run
+                ph = lambda what, d, t: report(i, f"{c.label}: {what}, batch {d} of {t}", per)  # noqa: E731
+            out = evaluate(c, bench, machine, scenarios, runs, seed, early_stop, cb, ph)
+            if progress is not None:
+                report(i, c.label, per)
+            return out
+
+        todo = [(i, c) for i, c in enumerate(cands) if c.netlist is not None]
+        workers = max(1, min(len(todo), CANDIDATES_AT_ONCE * numba.get_num_threads()))
+        with ThreadPoolExecutor(workers) as pool:
+            ran = dict(zip((i for i, _ in todo), pool.map(lambda ic: one(*ic), todo)))
+        self.base += per * len(todo)
+        return [ran.get(i, c) for i, c in enumerate(cands)]
 
 
 def _ranked(spec: DesignSpec, scenarios: Sequence[Scenario], runs: int, seed: int | None, done: list[Candidate],

@@ -6,11 +6,12 @@ The design is the spec's LQR with the bench's actuator model, its Bryson excursi
 point of a small grid (WEIGHT_GRID; tighter excursions on the states raise the loop gain, which
 shrinks the limit cycle a dead zone drives; the force's excursion stays the spec's), with and
 without the integral of the cart position. Every point that designs and fits the machine is run
-at every corner of the ranges in every scenario, SEARCH_RUNS seeds per corner; the point held best
+at the corners of the ranges in every scenario, SEARCH_RUNS seeds per corner; the point held best
 at its worst corner wins (ties: the smaller cart excursion over the corners, i.e. the most room
-before the limit switches; then the grid order). A point is dropped as soon as its corners so far
-rank no better than the best point's: further corners can only lower its worst and widen its
-excursion, so the choice is the one a full run of every point would make.
+before the limit switches; then the grid order). The search runs best first: further corners can
+only lower a point's worst and widen its excursion, so the point whose corners so far rank highest
+runs its next few, and the search ends when that point has run them all. The choice is the one a
+full run of every point would make, and a point that cannot win stops after its first corners.
 
 Other ways to beat a dead zone, and why a patch here does not use them (``ALTERNATIVES``): dither
 needs a periodic source the machine profiles do not list, and a dead-zone inverse needs diodes or a
@@ -20,10 +21,10 @@ comparator they do not have either. The sheet says so.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
 
-from patchgen.design.lqg import design_on
+from patchgen.design.lqg import Design, design_on
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
 from patchgen.inputs.spec import DesignSpec
@@ -32,7 +33,7 @@ from patchgen.patch.netlist import Netlist
 from patchgen.plant.cart_pendulum import ANGLE, POSITION, RATE_OF
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
-from patchgen.studies.bench_corners import BenchStudy, CornerOutcome, cart_excursion, study
+from patchgen.studies.bench_corners import BenchStudy, cart_excursion, study_in_steps
 
 # Bryson excursions times these (theta, s, s_dot, u); integral of s off, then on
 WEIGHT_GRID = {ANGLE: (1.0, 0.5), POSITION: (1.0, 0.5), RATE_OF[POSITION]: (1.0, 1 / 3), "u": (1.0,)}
@@ -116,22 +117,61 @@ def _key(held: int, room: float) -> tuple[int, float]:
     return held, -round(room, 4)
 
 
-def _rank(corners: list[CornerOutcome], held: int, room: float) -> tuple[int, float]:
-    """The rank of a point whose other scenarios held ``held`` at worst with excursion ``room``,
-    given these corners of the present one."""
-    return _key(min([held] + [c.outcome.held for c in corners]), max([room] + [cart_excursion(c) for c in corners]))
+class _Point:
+    """A grid point under search: its patch, its studies so far (the last may be partial) and the
+    best rank it can still reach (its corners so far: more corners only lower the runs held at
+    its worst and raise its excursion)."""
 
+    def __init__(self, index: int, factors: dict[str, float], integral: bool, design: Design, net: Netlist):
+        self.index, self.factors, self.integral, self.design, self.net = index, factors, integral, design, net
+        self.studies: list[BenchStudy] = []  # complete, in the search's scenario order
+        self.partial: BenchStudy | None = None  # the present scenario's so far
+        self.steps: Iterator[tuple[BenchStudy, bool]] | None = None
+        self.held, self.room = SEARCH_RUNS, 0.0
 
-def beaten(key: tuple[int, float], best_key: tuple[int, float] | None) -> bool:
-    """Whether a point whose corners so far rank ``key`` can no longer beat the best: more corners
-    only lower its worst corner's runs held and raise its excursion, so its rank only falls, and
-    a tie keeps the earlier point."""
-    return best_key is not None and key <= best_key
+    @property
+    def bound(self) -> tuple[int, float]:
+        """The best rank the point can still reach (its rank, once complete)."""
+        return _key(self.held, self.room)
+
+    def complete(self, scenarios: int) -> bool:
+        """Every scenario's study run to its end."""
+        return len(self.studies) == scenarios
+
+    def advance(self, sc: Scenario, machine: MachineProfile, bench: BenchProfile, seed: int | None) -> None:
+        """Run the next few corners of scenario ``sc`` (the present one, or the next when none is under way)."""
+        if self.steps is None:
+            self.steps = study_in_steps(self.net, self.design.plant, bench, machine, sc, seed=seed,
+                                        corner_runs=SEARCH_RUNS)
+        st, whole = next(self.steps)
+        new = st.corners[len(self.partial.corners) if self.partial else 0:]
+        self.held = min([self.held] + [c.outcome.held for c in new])
+        self.room = max([self.room] + [cart_excursion(c) for c in new])
+        self.partial = st
+        if whole:
+            self.studies.append(st)
+            self.partial, self.steps = None, None
+
+    def choice(self, tried: int) -> RobustChoice:
+        """The point as the search's choice: its worst corner the first scenario's that holds least."""
+        scenario, worst = None, None
+        for st in self.studies:
+            w = st.worst_corner
+            if worst is None or w.outcome.held < worst.outcome.held:
+                scenario, worst = st.scenario, w
+        return RobustChoice(self.design.spec, self.factors, self.integral, worst.outcome.held, worst.outcome.runs,
+                            worst.values, tried, scenario, self.net, tuple(self.studies))
 
 
 def search(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scenarios: Sequence[Scenario],
            seed: int | None = None, progress: Callable[[int, int], None] | None = None) -> RobustChoice | None:
     """The grid point held best at its worst corner of the bench's ranges (see the module docstring).
+
+    Best first: the point whose corners so far rank highest (ties: the earlier point) runs its next
+    few corners (patchgen.studies.bench_corners.study_in_steps; scenarios the shortest first), until
+    that point has run every corner of every scenario. Its rank then is at least the best any other
+    point can still reach, so it is the point a full run of every point would choose, and points
+    that cannot win stop after their first corners whatever order the grid is in.
 
     Parameters
     ----------
@@ -140,11 +180,11 @@ def search(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scena
     machine, bench : MachineProfile, BenchProfile
         The machine the patches are allocated on; the bench with its ranges.
     scenarios : sequence of Scenario
-        Every one is run at every corner (the shortest first).
+        Every one is run at every corner by the chosen point (the shortest first).
     seed : int, optional
         Its base seed (default: its own).
     progress : callable, optional
-        ``progress(done, total)`` after each grid point.
+        ``progress(done, total)``: grid points ruled out so far, of the grid.
 
     Returns
     -------
@@ -155,36 +195,26 @@ def search(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, scena
         return None
     order = sorted(scenarios, key=lambda sc: sc.duration_s)  # the short ones first: a loser drops early
     grid = grid_specs(spec, bench)
-    best, best_key, tried = None, None, 0
+    if progress is not None:
+        progress(0, len(grid))
+    points = []
     for i, (factors, integral, sp) in enumerate(grid):
-        if progress is not None:
-            progress(i, len(grid))
         try:
             d = design_on(sp, machine, bench)
-            net = build_patch(d, machine, 1)
+            points.append(_Point(i, factors, integral, d, build_patch(d, machine, 1)))
         except InputError:
             continue
-        tried += 1
-        worst, room, studies = None, 0.0, []
-        for sc in order:
-            held = SEARCH_RUNS if worst is None else worst[1].outcome.held
-            st = study(net, d.plant, bench, machine, sc, seed=seed, corner_runs=SEARCH_RUNS,
-                       stop=lambda done, h=held, r=room, b=best_key: beaten(_rank(done, h, r), b))
-            studies.append(st)
-            w = st.worst_corner
-            if worst is None or w.outcome.held < worst[1].outcome.held:
-                worst = (sc.name, w)
-            room = max(room, excursion(st))
-            if beaten(_key(worst[1].outcome.held, room), best_key):  # so is every study cut short
-                worst = None
-                break  # dropped: already no better than the best, whatever its other corners do
-        if worst is None:
-            continue
-        key = _key(worst[1].outcome.held, room)
-        if best_key is None or key > best_key:
-            best_key = key
-            best = RobustChoice(d.spec, factors, integral, worst[1].outcome.held, worst[1].outcome.runs,
-                                worst[1].values, 0, worst[0], net, tuple(studies))
+    if not points:
+        return None
+    settled = 0
+    while True:
+        top = max(points, key=lambda p: (p.bound, -p.index))
+        if top.complete(len(order)):
+            break
+        top.advance(order[len(top.studies)], machine, bench, seed)
+        if progress is not None:  # ruled out for now: below the top (the top's bound only falls)
+            settled = max(settled, len(grid) - len(points) + sum(p.bound < top.bound for p in points))
+            progress(settled, len(grid))
     if progress is not None:
         progress(len(grid), len(grid))
-    return None if best is None else replace(best, tried=tried)
+    return top.choice(len(points))

@@ -297,7 +297,8 @@ def test_the_dead_reduced_observer_loop_of_section_5_3_holds_nowhere():
 
 
 def test_the_ranking_is_the_same_on_one_thread_and_on_two():
-    """A round's scenarios run side by side, a thread each: the figures do not depend on it."""
+    """Candidates run side by side, and a round's scenarios a thread each: the figures do not
+    depend on it."""
     import numba
 
     spec = load_spec(design_path("bench-recommended"))

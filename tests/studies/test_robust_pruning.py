@@ -1,5 +1,5 @@
-"""The robust search drops a grid point as soon as its corners so far rank no better than the best
-point's, and still chooses what running every point at every corner would choose; the corners it
+"""The robust search runs best first (the point whose corners so far rank highest runs its next
+few) and still chooses what running every point at every corner would choose; the corners it
 ran on the chosen patch are taken up by recommend's corner study of that patch, not run again.
 
 The bench's runs are replaced by a table (runs held and cart excursion per point, scenario and
@@ -94,9 +94,11 @@ def test_a_study_takes_known_corners_as_they_are_and_runs_the_rest():
     assert again.as_dict() == fresh.as_dict()
     assert len(ran) == len(fresh.corners) - 5 + len(fresh.ends)
     assert not any(k.values in ran for k in fresh.corners[:5])
-    # run together or one at a time (as the robust search's pruned studies run them), the same figures
-    one_by_one = bench_corners.study(net, plant, UNCERTAIN, GP6, push, corner_runs=8, stop=lambda done: False)
-    assert one_by_one.corners == fresh.corners
+    # run together or a few at a time (as the robust search runs them), the same figures
+    steps = list(bench_corners.study_in_steps(net, plant, UNCERTAIN, GP6, push, corner_runs=8))
+    assert [whole for _, whole in steps] == [False] * (len(steps) - 1) + [True] and len(steps) > 1
+    assert all(st.corners == fresh.corners[:len(st.corners)] for st, _ in steps)
+    assert steps[-1][0].corners == fresh.corners and not steps[-1][0].ends
 
 
 def test_the_robust_candidate_brings_its_corners_only_for_the_patch_they_were_run_on(monkeypatch):

@@ -108,7 +108,8 @@ def out_records(cfg, draws):
     results = np.zeros((runs, len(kernel.RESULTS)))
     results[:, [kernel.R_TRIP, kernel.R_FALL]] = np.nan
     return kernel.Outputs(results=results, overload_first=np.full((runs, n_amp), np.nan),
-                          overload_time=np.zeros((runs, n_amp)), history=np.zeros((0, 1, kernel.H_AMPS + n_amp)),
+                          overload_time=np.zeros((runs, n_amp)), amp_peak=np.zeros((runs, n_amp)),
+                          history=np.zeros((0, 1, kernel.H_AMPS + n_amp)),
                           history_length=np.zeros(0, dtype=np.int64))
 
 

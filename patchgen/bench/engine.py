@@ -142,6 +142,7 @@ class BatchOutput:
     limit_time: np.ndarray  # s the command sat at the actuator's limit (a motor's: the amplifier's)
     overload_first: np.ndarray  # (runs, amps) s, NaN if never
     overload_time: np.ndarray  # (runs, amps) total time overloaded, s
+    amp_peak: np.ndarray  # (runs, amps) the largest |output| (V, before the rails)
     final_state: np.ndarray  # (runs, 4)
     history: np.ndarray  # (n_history, samples, channels)
     history_length: np.ndarray  # samples recorded per history run (a run ends at a trip)
@@ -215,7 +216,7 @@ def run_batch(cfg: EngineConfig, draws: Draws, n_history: int) -> BatchOutput:
     results = np.zeros((runs, len(RESULTS)))
     results[:, [R_TRIP, R_FALL]] = np.nan
     out = Outputs(results=results, overload_first=np.full((runs, n_amp), np.nan),
-                  overload_time=np.zeros((runs, n_amp)),
+                  overload_time=np.zeros((runs, n_amp)), amp_peak=np.zeros((runs, n_amp)),
                   history=np.zeros((n_history, n_samples, H_AMPS + n_amp)),
                   history_length=np.zeros(n_history, dtype=np.int64))
     args = (draws, *cfg.records, out)
@@ -230,7 +231,7 @@ def run_batch(cfg: EngineConfig, draws: Draws, n_history: int) -> BatchOutput:
     return BatchOutput(
         **{name: results[:, RESULTS.index(name)] for name in SUMMARIES},
         final_state=results[:, R_FINAL:R_FINAL + N_STATES], overload_first=out.overload_first,
-        overload_time=out.overload_time, history=out.history, history_length=out.history_length,
+        overload_time=out.overload_time, amp_peak=out.amp_peak, history=out.history, history_length=out.history_length,
     )
 
 

@@ -160,6 +160,7 @@ class Outputs(NamedTuple):
     results: np.ndarray  # (runs, len(RESULTS))
     overload_first: np.ndarray  # (runs, amplifiers) s
     overload_time: np.ndarray  # (runs, amplifiers) s
+    amp_peak: np.ndarray  # (runs, amplifiers) V: the largest |output| at a step's start, rails ignored
     history: np.ndarray  # (history runs, samples, H_AMPS + amplifiers)
     history_length: np.ndarray  # samples recorded per history run
 
@@ -205,7 +206,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     flat, flat_staged, flat_K = state.reshape(n_int * nl), staged.reshape(n_int * nl), K.reshape((4, K[0].size))
     act_rows = (rx, r_force, r_limit)
     force, at_limit = K[0, r_force], K[0, r_limit]  # at the step's start: recorded and summarised
-    over = np.empty((2, na, nl))  # each lane's overloads (first time, time), copied out at its end
+    over = np.empty((3, na, nl))  # each lane's overloads (first time, time) and peak, copied out at its end
     for l in range(nl):
         r = lo + min(l, nr - 1)  # a lane past the block's runs computes its last run again
         plant_coefficients(plants[r], pc[:, l])
@@ -221,6 +222,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
             drift[j, l] = wiring.drift[j] * signs[r, j]
             za[j, l] = wiring.ic[j]
             over[0, j, l], over[1, j, l] = out.overload_first[r, j], out.overload_time[r, j]
+            over[2, j, l] = out.amp_peak[r, j]
         for i in range(N_STATES):
             xp[i, l] = settings.x0[i]
         for i in range(ns):  # a filter starts settled: on its position, at the rate the run starts with
@@ -347,6 +349,10 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
         fig[F_LIMIT, l] = fig[F_LIMIT, l] + h if at_limit else fig[F_LIMIT, l]
     for l in range(nl):  # apart: a loop storing into one array (fig) vectorises
         events += alive[l] & (tripped[l] | ((abs(xp[THETA, l]) > fall) & (not fallen[l])))
+    for j in range(raw.shape[0]):  # each amplifier's peak, before the rails (an ended lane's no longer read)
+        for l in range(nl):
+            a = abs(raw[j, l])
+            over[2, j, l] = a if a > over[2, j, l] else over[2, j, l]
     overloads = 0
     for j in range(raw.shape[0]):
         for l in range(nl):
@@ -371,6 +377,7 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
         if last:
             for j in range(raw.shape[0]):
                 out.overload_first[r, j], out.overload_time[r, j] = over[0, j, l], over[1, j, l]
+                out.amp_peak[r, j] = over[2, j, l]
             res[r, R_MAX_TH], res[r, R_MAX_S] = fig[F_MAX_TH, l], fig[F_MAX_S, l]
             res[r, R_RMS_TH] = math.sqrt(fig[F_SUM_TH2, l] / (n + 1))
             res[r, R_MAX_UC], res[r, R_MAX_F], res[r, R_LIMIT] = fig[F_MAX_UC, l], fig[F_MAX_F, l], fig[F_LIMIT, l]

@@ -52,6 +52,11 @@ class RunSummary:
     actuator_limit_time_s: float  # the command sat at the actuator's limit (a motor's: the amplifier's) this long
     final_state: tuple[float, float, float, float]
     drawn: tuple[tuple[str, float], ...] = ()  # the run's plant (--spread) and bench (--bench-spread) draws
+    amp_peaks_V: tuple[tuple[str, float], ...] = ()  # each amplifier's largest |output| (V, before the rails)
+
+    def amp_peak(self, amplifier: str) -> float:
+        """One amplifier's largest |output| over the run (V, before the rails; 0 when not recorded)."""
+        return next((v for a, v in self.amp_peaks_V if a == amplifier), 0.0)
 
 
 @dataclass(frozen=True)
@@ -67,6 +72,8 @@ class Distribution:
     fraction_at_actuator_limit: float  # runs whose command sat at the actuator's limit (a fact, not a fault)
     overload_fraction: dict[str, float]  # per amplifier
     percentiles: dict[str, dict[str, float | None]]
+    # per amplifier: percentiles of its largest |output| over a run (V, before the rails), and the most
+    amplifier_peak_V: dict[str, dict[str, float | None]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -164,7 +171,7 @@ def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run:
     ovl_first, ovl_time = cat("overload_first"), cat("overload_time")
     max_th, max_s, rms_th = cat("max_abs_theta"), cat("max_abs_s"), cat("rms_theta")
     max_uc, max_f, final = cat("max_abs_u_c"), cat("max_abs_force"), cat("final_state")
-    limit = cat("limit_time")
+    limit, peak = cat("limit_time"), cat("amp_peak")
     return [
         RunSummary(
             run=first_run + i,
@@ -181,6 +188,7 @@ def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run:
             actuator_limit_time_s=round(float(limit[i]), 9),
             final_state=tuple(float(v) for v in final[i]),
             drawn=drawn[i] if drawn else (),
+            amp_peaks_V=tuple((a, float(peak[i, j])) for j, a in enumerate(amp_ids)),
         )
         for i in range(len(trip))
     ]
@@ -212,6 +220,8 @@ def distribution(runs: list[RunSummary], amps: tuple[str, ...]) -> Distribution:
             "trip_time_s": pct([r.trip_time_s for r in runs if r.trip_time_s is not None]),
             "fall_time_s": pct([r.fall_time_s for r in runs if r.fall_time_s is not None]),
         },
+        amplifier_peak_V={a: {**pct([r.amp_peak(a) for r in runs]), "max": max(r.amp_peak(a) for r in runs)}
+                          for a in amps},
     )
 
 

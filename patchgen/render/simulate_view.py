@@ -106,6 +106,27 @@ def _overloads(over: list[str]) -> str:
     return "\n".join(over[:OVERLOADS_SHOWN] + ([f"and {more} more"] if more > 0 else [])) or "none"
 
 
+def peaks_table(result: SimResult) -> Table:
+    """Each amplifier's largest |output| over a run as a share of the rails (before them: past 100 %
+    is an overload), run 0's and, for a Monte Carlo, the median and the 5th to 95th percentiles:
+    how much of its range a signal uses, so how far above the machine's noise and offsets it lives."""
+    d, r0 = result.distribution, result.runs[0]
+    many = d.runs > 1
+    rails = result.settings.saturation_V
+    t = table(f"amplifier peaks, % of the rails (+/-{rails:g} V)", text("amplifier"), number("run 0"),
+              *((number(f"{d.runs} runs"), number("5 to 95 %")) if many else ()))
+    for a in result.amplifiers:
+        what = result.carries.get(a, (0, ""))[1]
+        row = [f"{a} ({what})" if what else a, f"{100 * r0.amp_peak(a) / rails:.1f}"]
+        p = d.amplifier_peak_V.get(a)
+        if many and p:
+            row += [f"{100 * p['p50'] / rails:.1f}", f"{100 * p['p5'] / rails:.1f}-{100 * p['p95'] / rails:.1f}"]
+        elif many:
+            row += ["-", ""]
+        add_row(t, *row)
+    return t
+
+
 def _p(d, key: str) -> tuple[str, str]:
     """The median, and the 5th to 95th percentiles."""
     p = d.percentiles.get(key)
@@ -119,6 +140,8 @@ def print_report(report: SimulateReport, written: list, console: Console | None 
     and the files written."""
     console = console or Console()
     show(console, summary_table(report.result))
+    if report.result.amplifiers:
+        show(console, peaks_table(report.result))
     if report.corners is not None:
         show(console, corner_table(report.corners))
     for lp in report.loops:

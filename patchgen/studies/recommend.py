@@ -298,8 +298,8 @@ def recommend(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile, sc
     rec = _ranked(spec, scenarios, runs, seed, done, bench)
     if rec.best is None and bench.uncertainty.ranges:  # gains chosen over the corners, when none holds there
         robust_why = {"weights": f"{robust.LABEL}: {robust.WHY_GAINS}", "integrators.int_s": robust.LABEL}
-        where = (lambda i, n: progress(f"{robust.LABEL}: weights over the corners, {i} of {n} ruled out or chosen", run.base,
-                                       run.total)) if progress else None
+        where = (lambda i, n: progress(f"{robust.LABEL}: weights over the corners, {i} of {n} ruled out or chosen",
+                                       run.base, run.total)) if progress else None
         done += run([departed(c, spec, bench, robust_why)
                      for c in extra_candidates(spec, machine, bench, scenarios, seed, where)])
         rec = _ranked(spec, scenarios, runs, seed, done, bench)

@@ -31,6 +31,7 @@ def reference_runs(cfg: EngineConfig, draws: Draws, n_history: int = 1):
            "max_abs_theta": np.zeros(runs), "max_abs_s": np.zeros(runs), "rms_theta": np.zeros(runs),
            "max_abs_u_c": np.zeros(runs), "max_abs_force": np.zeros(runs), "limit_time": np.zeros(runs),
            "overload_first": np.full((runs, n_amp), np.nan), "overload_time": np.zeros((runs, n_amp)),
+           "amp_peak": np.zeros((runs, n_amp)),
            "final_state": np.zeros((runs, 4)),
            "history": np.zeros((n_history, n_samples, H_AMPS + n_amp)),
            "history_length": np.zeros(n_history, dtype=np.int64)}
@@ -47,7 +48,7 @@ def reference_runs(cfg: EngineConfig, draws: Draws, n_history: int = 1):
                  *draws.actuators[r], dist.kind, dist.t0, dist.t1,
                  dist.value, st.fall_angle, out["trip_time"], out["fall_time"], out["max_abs_theta"],
                  out["max_abs_s"], out["rms_theta"], out["max_abs_u_c"], out["max_abs_force"], out["limit_time"],
-                 out["overload_first"], out["overload_time"], out["final_state"], out["history"],
+                 out["overload_first"], out["overload_time"], out["amp_peak"], out["final_state"], out["history"],
                  out["history_length"])
     return out
 
@@ -146,7 +147,7 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
              amp_kind, in_ptr, in_src, in_gain, param1, param2, ic, drift_mag, ana, ans, fna, fns, sat, clip,
              out_index, act, K_U, tau, dz, flim, emf,
              dist_kind, dist_t0, dist_t1, dist_value, fall_angle,
-             trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, lim_t, ovl_first, ovl_time, final,
+             trip_t, fall_t, max_th, max_s, rms_th, max_uc, max_f, lim_t, ovl_first, ovl_time, amp_peak, final,
              hist, hist_len):
     ns = sensor_state.shape[0]
     na = amp_kind.shape[0]
@@ -310,6 +311,7 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
                 fallen = True
                 fall_t[r] = t
             for j in range(na):
+                amp_peak[r, j] = max(amp_peak[r, j], abs(raw[j]))
                 if abs(raw[j]) > sat or pinned[j]:
                     if math.isnan(ovl_first[r, j]):
                         ovl_first[r, j] = t

@@ -36,7 +36,7 @@ from .engine_reference import reference_runs
 
 SIMS = ROOT / "sims"
 FIELDS = ("trip_time", "fall_time", "max_abs_theta", "max_abs_s", "rms_theta", "max_abs_u_c",
-          "max_abs_force", "limit_time", "overload_first", "overload_time", "final_state")
+          "max_abs_force", "limit_time", "overload_first", "overload_time", "amp_peak", "final_state")
 
 
 @pytest.mark.parametrize("ctr, key, expected", [

@@ -125,6 +125,29 @@ def test_overloads_are_recorded_with_amplifier_and_time(ch5):
         assert np.max(np.abs(res.history[a])) <= GP6.imperfections.saturation_V
 
 
+def test_each_amplifiers_peak_is_its_largest_output_at_every_step(ch5):
+    """The peak is taken at every step, before the rails: at least the largest recorded sample, at
+    most a step's change above it in an ideal run; on the bench an overloaded amplifier's peak
+    passes the rails it was clipped at; the output's peak is max |u_c| when nothing clips it."""
+    sc = load_scenario(SIMS / "offset-10deg.toml")
+    ideal = simulate(ch5, PLANT, BENCH, GP6, sc, ideal=True)
+    run = ideal.runs[0]
+    assert [a for a, _ in run.amp_peaks_V] == list(ideal.amplifiers)
+    for a in ideal.amplifiers:
+        sampled = float(np.max(np.abs(ideal.history[a])))
+        assert sampled <= run.amp_peak(a) <= sampled * 1.01 + 1e-9, a
+    assert run.amp_peak(ch5.output.source) == run.max_abs_u_c_V
+    bench = simulate(ch5, PLANT, BENCH, GP6, sc, runs=4, keep_history=False)
+    sat = GP6.imperfections.saturation_V
+    for r in bench.runs:
+        assert {o.amplifier for o in r.overloads} <= {a for a, v in r.amp_peaks_V if v > sat - 1e-9}
+        assert any(v > sat for _, v in r.amp_peaks_V)
+    d = bench.distribution.amplifier_peak_V
+    for a in bench.amplifiers:
+        values = sorted(r.amp_peak(a) for r in bench.runs)
+        assert d[a]["max"] == values[-1] and values[0] <= d[a]["p5"] <= d[a]["p50"] <= d[a]["p95"] <= values[-1]
+
+
 def test_monte_carlo_distribution_and_progress(ch5):
     sc = load_scenario(SIMS / "hold-120s.toml").model_copy(update={"duration_s": 20.0})
     calls = []

@@ -349,14 +349,12 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
         fig[F_LIMIT, l] = fig[F_LIMIT, l] + h if at_limit else fig[F_LIMIT, l]
     for l in range(nl):  # apart: a loop storing into one array (fig) vectorises
         events += alive[l] & (tripped[l] | ((abs(xp[THETA, l]) > fall) & (not fallen[l])))
-    for j in range(raw.shape[0]):  # each amplifier's peak, before the rails (an ended lane's no longer read)
+    overloads = 0
+    for j in range(raw.shape[0]):  # and each amplifier's peak, before the rails (an ended lane's no longer read)
         for l in range(nl):
             a = abs(raw[j, l])
             over[2, j, l] = a if a > over[2, j, l] else over[2, j, l]
-    overloads = 0
-    for j in range(raw.shape[0]):
-        for l in range(nl):
-            overloads += alive[l] & ((abs(raw[j, l]) > sat) | pinned[j, l])
+            overloads += alive[l] & ((a > sat) | pinned[j, l])
     if overloads:  # the first time, and the time up to the run's last sample
         for j in range(raw.shape[0]):
             for l in range(nl):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import replace
 
 from patchgen.design.lqg import Design
@@ -11,11 +12,12 @@ from patchgen.patch.allocation import allocate
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.parts import parts_for
 from patchgen.patch.realization import realize
+from patchgen.patch.snr_scaling import rescaled
 from patchgen.profiles.machine import MachineProfile, the_machine
 
 
 def build_patch(design: Design, machine: MachineProfile, units: int | str | None = None,
-                suggest: bool = True) -> Netlist:
+                suggest: bool = True, scales: Mapping[str, float] | None = None) -> Netlist:
     """Scale the design into machine volts and place it on ``units`` slaved machines (default: the
     spec's [patch] units; "auto" takes the fewest that fit, up to the spec's max_units, else the
     profile's). With ``[patch] realization = "compensator"`` the law is placed as one system
@@ -25,9 +27,12 @@ def build_patch(design: Design, machine: MachineProfile, units: int | str | None
 
     A patch that does not fit the spec's own [patch] settings (``units`` not given) is refused
     with the [patch] change that makes it fit, when one does and ``suggest`` asks for it (a study
-    that judges the error, not a user, need not pay for the search): :func:`fitting_change`."""
+    that judges the error, not a user, need not pay for the search): :func:`fitting_change`.
+
+    ``scales`` multiplies each named block's voltage, the law unchanged
+    (patchgen.patch.snr_scaling.snr_scales chooses them for signal-to-noise; the law as its states only)."""
     try:
-        return _build(design, machine, units)
+        return _build(design, machine, units, scales)
     except ResourceError as exc:
         cure = fitting_change(design, machine) if units is None and suggest else None
         if cure is None:
@@ -61,7 +66,8 @@ def fitting_change(design: Design, machine: MachineProfile) -> Cure | None:
     return None
 
 
-def _build(design: Design, machine: MachineProfile, units: int | str | None) -> Netlist:
+def _build(design: Design, machine: MachineProfile, units: int | str | None,
+           scales: Mapping[str, float] | None = None) -> Netlist:
     """build_patch without a suggestion."""
     spec = design.spec
     units = spec.patch.units if units is None else units
@@ -70,6 +76,8 @@ def _build(design: Design, machine: MachineProfile, units: int | str | None) -> 
     if spec.patch.realization == "compensator" and design.controller is not None:
         return _place_compensator(design, machine, tries)  # plain state feedback has no other form
     real = realize(design, machine)
+    if scales:
+        real = rescaled(real, scales)
     _check_law_reaches_pots(real, machine, spec)
     for n in tries:
         try:

@@ -1,0 +1,177 @@
+"""Scaling for signal-to-noise: each internal signal's voltage chosen so that the signals use as
+much of the machine's range as the bench lets them.
+
+A signal scaled by sensor constants alone may live at a few per cent of the reference, where the
+machine's amplifier noise, integrator offsets and the dial's step weigh many times more than they
+would at full scale (bench-recommended's actuator-state integrator peaks at 5 % of the rails over
+two minutes of balancing). Every signal a block produces can be carried at any voltage scale: a
+block whose voltage is multiplied by alpha has its input coefficients multiplied by alpha (a
+differentiator its T_d), and every coefficient that reads it divided by alpha, so the law is
+unchanged. The sensors (the bench's) and u_c (the servo amplifier's input) keep theirs.
+
+The choice, as in the analog-compilation literature (Achour et al., Jaunt, ASPLOS 2018; Legno,
+ASPLOS 2020), is an optimisation, here a pair of linear programmes in y = ln alpha (exact, HiGHS):
+
+1. maximise the smallest predicted peak of a free block's amplifiers, as a share of the reference
+   (the worst signal-to-noise and signal-to-offset ratio: the noise and offsets are the same on
+   every amplifier of a machine);
+2. with that held, maximise the sum of ln alpha (every other signal as large as it may be);
+
+subject to
+
+- no amplifier's predicted peak (the bench Monte Carlo's envelope, supplied by the caller) past
+  HEADROOM of the reference; a block already past it is brought down towards it as far as its
+  coefficients allow (and left out of the first programme);
+- no coefficient past the largest weighted input (a gain stage or another input would be needed)
+  unless it was already, and then no larger than it was;
+- no coefficient below the dial floor (a setting whose dial step is more than DIAL_SHARE of
+  itself) unless it was already, and then no smaller than it was (the signal-to-quantisation
+  ratio of the law is never made worse than the dial allows);
+- a coefficient wired straight (exactly an input weight, no pot) stays exactly that;
+- no block scaled down unless its peak is past HEADROOM.
+
+Every scale 1 is feasible (the limits are relative to the coefficients as they are), so both
+programmes always have a solution.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.optimize import linprog
+
+from patchgen.patch.realization import Realization, Term
+from patchgen.profiles.machine import MachineProfile
+
+HEADROOM = 0.8  # the largest share of the reference a predicted peak may reach: room for runs the envelope missed
+DIAL_SHARE = 0.01  # a pot whose dial step is more than this share of its setting limits the law it sets
+FIXED = ("u_c",)  # blocks whose scale the bench fixes (the servo amplifier's input, 1 V per V)
+INSIDE = 1e-6  # relative: every limit is kept this far inside, so a coefficient at a limit stays within it
+STAGE_ONE_SLACK = 1e-9  # relative: stage 2 keeps stage 1's optimum to this (the solver's tolerance)
+
+
+@dataclass(frozen=True)
+class BlockPeak:
+    """The predicted largest |output| (V) of the amplifiers that carry one block's signal: the
+    least of them (what its worst signal-to-noise ratio is) and the most (what may overload)."""
+
+    least: float
+    most: float
+
+
+def dial_floor(machine: MachineProfile) -> float:
+    """The smallest coefficient whose dial step is at most DIAL_SHARE of its setting (on a x1 input)."""
+    return machine.pot_resolution / DIAL_SHARE
+
+
+def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: MachineProfile) -> dict[str, float]:
+    """The factor each block's voltage is multiplied by (1: kept), see the module docstring.
+
+    Parameters
+    ----------
+    real : Realization
+        The law scaled by the sensor constants (patchgen.patch.realization.realize).
+    peaks : mapping of str to BlockPeak
+        Each block's predicted amplifier peaks (V) at its present scale; a block not given, or
+        with a zero peak, keeps its scale (nothing predicts how large it gets).
+    machine : MachineProfile
+        Its reference, largest weighted input, input weights and dial step.
+
+    Returns
+    -------
+    dict of str to float
+        Block name -> factor, for every block the realisation has.
+    """
+    ref = machine.reference_V
+    free = [b.name for b in real.blocks if b.name not in FIXED and peaks.get(b.name, BlockPeak(0, 0)).least > 0]
+    out = {b.name: 1.0 for b in real.blocks}
+    if not free:
+        return out
+    col = {name: i for i, name in enumerate(free)}
+    n = len(free)  # variables: y_b for each free block, then t
+    rows, rhs, eq_rows, eq_rhs = [], [], [], []
+    bounds = []
+
+    def row(coef: dict[int, float]) -> np.ndarray:
+        r = np.zeros(n + 1)
+        for i, v in coef.items():
+            r[i] += v
+        return r
+
+    gain = np.zeros(n + 1)  # stage 2's objective: up for a block within HEADROOM, down for one past it
+    for name in free:
+        p = peaks[name]
+        top = math.log(HEADROOM * ref / p.most) + math.log1p(-INSIDE)
+        if top >= 0.0:
+            bounds.append((0.0, top))
+            rows.append(row({col[name]: -1.0, n: 1.0}))  # t <= ln(least / ref) + y_b
+            rhs.append(math.log(p.least / ref))
+            gain[col[name]] = 1.0
+        else:  # past HEADROOM already: down towards it as far as its coefficients allow, never up
+            bounds.append((top, 0.0))
+            gain[col[name]] = -1.0
+    bounds.append((None, None))
+    top_c, floor, weights = max(machine.input_weights) * machine.pot_max, dial_floor(machine), machine.input_weights
+    for b in real.blocks:
+        if b.kind == "differentiate":
+            continue  # its input is a sensor; its scale is its T_d (an external part's value), not a coefficient
+        for term in b.terms:
+            c = abs(term.coeff)
+            coef = {}
+            if b.name in col:
+                coef[col[b.name]] = 1.0
+            if term.signal in col:
+                coef[col[term.signal]] = coef.get(col[term.signal], 0.0) - 1.0
+            coef = {i: v for i, v in coef.items() if v != 0.0}
+            if c == 0.0 or not coef:
+                continue
+            if any(math.isclose(c, w, rel_tol=1e-12) for w in weights):
+                eq_rows.append(row(coef))  # wired straight: stays a weight exactly
+                eq_rhs.append(0.0)
+                continue
+            rows.append(row(coef))  # ln c + d <= ln max(top, c)
+            rhs.append(max(0.0, math.log(top_c / c) + math.log1p(-INSIDE)) if c < top_c else 0.0)
+            rows.append(-row(coef))  # ln c + d >= ln min(c, floor)
+            rhs.append(-math.log(floor / c) if c > floor else 0.0)
+    A, b_ub = np.array(rows), np.array(rhs)
+    A_eq, b_eq = (np.array(eq_rows), np.array(eq_rhs)) if eq_rows else (None, None)
+    if not gain[:n].any():
+        return out
+    if (gain[:n] > 0).any():  # stage 1: the worst share of the reference
+        first = linprog(-row({n: 1.0}), A_ub=A, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds, method="highs")
+        t_star = first.x[n]
+        A = np.vstack([A, -row({n: 1.0})])
+        b_ub = np.append(b_ub, -(t_star - STAGE_ONE_SLACK * max(1.0, abs(t_star))))
+    second = linprog(-gain, A_ub=A if len(A) else None, b_ub=b_ub if len(A) else None, A_eq=A_eq, b_eq=b_eq,
+                     bounds=bounds, method="highs")
+    y = second.x[:n]
+    for name, v in zip(free, y):
+        out[name] = math.exp(v)
+    return out
+
+
+def rescaled(real: Realization, scales: Mapping[str, float]) -> Realization:
+    """The realisation with each block's voltage multiplied by its factor (the law unchanged):
+    its input coefficients times its factor (a differentiator's T_d instead), every coefficient
+    on it divided by it."""
+    def alpha(signal: str) -> float:
+        return scales.get(signal, 1.0)
+
+    def term(t: Term, own: float) -> Term:
+        k = own / alpha(t.signal)
+        return Term(t.signal, t.coeff * k, None if t.design is None else t.design * k)
+
+    blocks = []
+    for b in real.blocks:
+        a = alpha(b.name)
+        if b.kind == "differentiate":
+            blocks.append(replace(b, terms=tuple(term(t, 1.0) for t in b.terms), volts_per_unit=b.volts_per_unit * a,
+                                  T_d_s=None if b.T_d_s is None else b.T_d_s * a))
+        else:
+            blocks.append(replace(b, terms=tuple(term(t, a) for t in b.terms), volts_per_unit=b.volts_per_unit * a))
+    return replace(real, blocks=tuple(blocks))
+
+

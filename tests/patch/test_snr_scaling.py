@@ -1,0 +1,115 @@
+"""Scaling for signal-to-noise: the law is unchanged, every limit holds, and no block could be
+made larger without passing one (the programme's optimum, checked from the outside)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from patchgen.patch.build import build_patch
+from patchgen.patch.readback import wired_law
+from patchgen.patch.realization import realize
+from patchgen.patch.snr_scaling import FIXED, HEADROOM, BlockPeak, dial_floor, rescaled, snr_scales
+from patchgen.profiles.machine import load_machine
+from tests.conftest import design_from_path, design_path
+
+# the law as its states: a differentiator with a lag state, an integral state, a Kalman estimator
+NAMES = ("bench-recommended", "thesis-ch5", "quanser-ip02")
+W = np.logspace(-1, 2.5, 12)  # rad/s, across every crossover of the shipped loops
+
+
+@pytest.fixture(scope="module", params=[(n, m) for n in NAMES for m in ("gp6", "the-analog-thing")],
+                ids=lambda p: f"{p[0]}-{p[1]}")
+def case(request):
+    name, machine = request.param
+    d, _ = design_from_path(design_path(name))
+    m = load_machine(machine)
+    return d, m, realize(d, m)
+
+
+def _limits_hold(real, scaled, alpha, peaks, m):
+    """Every limit of the module's docstring, read off the scaled realisation."""
+    top, floor = max(m.input_weights) * m.pot_max, dial_floor(m)
+    for name, a in alpha.items():
+        p = peaks.get(name)
+        if p is not None and p.least > 0 and name not in FIXED:
+            if p.most > HEADROOM * m.reference_V:  # brought down, never past HEADROOM
+                assert HEADROOM * m.reference_V * (1 - 1e-5) <= a * p.most <= p.most, name
+            else:
+                assert 1.0 <= a and a * p.most <= HEADROOM * m.reference_V * (1 + 1e-9), name
+        else:
+            assert a == 1.0, name
+    for before, after in zip(real.blocks, scaled.blocks):
+        for t0, t1 in zip(before.terms, after.terms):
+            c0, c1 = abs(t0.coeff), abs(t1.coeff)
+            if before.kind == "differentiate" or c0 == 0.0:
+                continue
+            assert c1 <= max(top, c0) * (1 + 1e-9), (before.name, t0.signal)
+            assert c1 >= min(floor, c0) * (1 - 1e-9), (before.name, t0.signal)
+            if any(c0 == w for w in m.input_weights):
+                assert c1 == pytest.approx(c0, rel=1e-9), (before.name, t0.signal)
+
+
+def _no_block_can_grow(real, alpha, peaks, m):
+    """Stage 2's optimum, from outside: each free block 0.01 % larger passes some limit."""
+    for name, a in alpha.items():
+        p = peaks.get(name, BlockPeak(0, 0))
+        if name in FIXED or p.least <= 0 or p.most > HEADROOM * m.reference_V:
+            continue
+        bigger = {**alpha, name: a * 1.0001}
+        with pytest.raises(AssertionError):
+            _limits_hold(real, rescaled(real, bigger), bigger, peaks, m)
+
+
+@settings(max_examples=30, deadline=None)
+@given(data=st.data())
+def test_random_envelopes_keep_every_limit_and_reach_one(case, data):
+    d, m, real = case
+    peaks = {b.name: BlockPeak(*sorted(data.draw(st.tuples(*[st.floats(1e-3, 1.5 * m.reference_V)] * 2))))
+             for b in real.blocks}
+    alpha = snr_scales(real, peaks, m)
+    assert set(alpha) == {b.name for b in real.blocks} and alpha["u_c"] == 1.0
+    scaled = rescaled(real, alpha)
+    _limits_hold(real, scaled, alpha, peaks, m)
+    _no_block_can_grow(real, alpha, peaks, m)
+    # the worst free block's share of the reference is never lowered unless its own peak had to come down
+    free = [n for n in alpha if n not in FIXED]
+    if free and all(peaks[n].most <= HEADROOM * m.reference_V for n in free):
+        assert min(alpha[n] * peaks[n].least for n in free) >= min(peaks[n].least for n in free) * (1 - 1e-9)
+
+
+def test_the_scaled_patch_wires_the_same_law(case):
+    """Through the whole patch stage: the law read back from the netlist, within the dial's
+    quantisation, is the law of the unscaled patch, while each scaled block's amplifier carries
+    its signal at the new volts per unit."""
+    d, m, real = case
+    peaks = {b.name: BlockPeak(0.05 * m.reference_V, 0.1 * m.reference_V) for b in real.blocks}
+    alpha = snr_scales(real, peaks, m)
+    assert any(a > 1.5 for n, a in alpha.items() if n not in FIXED), alpha  # 10 % is far below the headroom
+    plain, scaled = build_patch(d, m), build_patch(d, m, scales=alpha)
+    g0, g1 = wired_law(plain).freqresp(W), wired_law(scaled).freqresp(W)
+    # each pot is within half a dial step of its coefficient: the laws differ by the steps alone
+    assert np.abs(g1 - g0).max() <= 0.01 * np.abs(g0).max(), np.abs(g1 - g0).max() / np.abs(g0).max()
+    vpu = {b.name: b.volts_per_unit for b in real.blocks}
+    for a in scaled.amplifiers:
+        q = a.carries.quantity
+        if q in vpu and q not in FIXED:
+            assert a.carries.volts_per_unit == pytest.approx(vpu[q] * alpha[q], rel=1e-9), a.id
+
+
+def test_bench_recommended_in_hold_uses_twice_the_range():
+    """The measured envelope of bench-recommended on uw-1991 (offset-10deg, the largest of the
+    standard scenarios for both blocks: the actuator state 1.28 V, theta_dot 4.16 V): the actuator
+    state doubles (its u_c input then at the x10 input's top), theta_dot rises to HEADROOM."""
+    d, _ = design_from_path(design_path("bench-recommended"))
+    m = load_machine("gp6")
+    real = realize(d, m)
+    alpha = snr_scales(real, {"actuator": BlockPeak(1.28, 1.28), "theta_dot": BlockPeak(4.16, 4.16)}, m)
+    assert alpha["actuator"] == pytest.approx(2.0, rel=1e-5)
+    assert alpha["theta_dot"] * 4.16 == pytest.approx(HEADROOM * m.reference_V, rel=1e-5)
+    u_c = rescaled(real, alpha).block("u_c")
+    assert math.isclose(abs(next(t.coeff for t in u_c.terms if t.signal == "actuator")), 3.5201 / 2, rel_tol=1e-3)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numba
 
@@ -50,6 +50,7 @@ class Prediction:
     max_theta_deg: float
     max_s_m: float
     overloads: str
+    amp_peaks_V: dict[str, float] = field(default_factory=dict)  # each amplifier's largest |output| over the runs
 
 
 def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
@@ -93,7 +94,8 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
         ovl = sorted({o.amplifier for run in summaries for o in run.overloads})
         return Prediction(name, sc.description, runs, sum(r.held for r in summaries) / runs, r0.trip_time_s,
                           r0.fall_time_s, max(x.max_abs_theta_deg for x in summaries),
-                          max(x.max_abs_s_m for x in summaries), ", ".join(ovl) or "none")
+                          max(x.max_abs_s_m for x in summaries), ", ".join(ovl) or "none",
+                          {a: max(x.amp_peak(a) for x in summaries) for a, _ in r0.amp_peaks_V})
 
     loaded = [load_scenario(given) for given in scenarios or bench_scenarios(bench)]
     # side by side, the long hold first, so that the short scenarios fill the other cores

@@ -41,7 +41,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.optimize import linprog
 
 from patchgen.patch.realization import Realization, Term
 from patchgen.profiles.machine import MachineProfile
@@ -85,6 +84,8 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
     dict of str to float
         Block name -> factor, for every block the realisation has.
     """
+    from scipy.optimize import linprog  # 0.1 s of import, only where a scaling is chosen
+
     ref = machine.reference_V
     free = [b.name for b in real.blocks if b.name not in FIXED and peaks.get(b.name, BlockPeak(0, 0)).least > 0]
     out = {b.name: 1.0 for b in real.blocks}

@@ -5,7 +5,8 @@ patchgen.studies.bench_corners). Computed here; render/bench_sheet only words it
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 from patchgen.design.lqg import Design
@@ -25,6 +26,42 @@ HOLD_SCENARIO = "hold-120s"  # the scenario run at the corners of the bench's ra
 
 
 @dataclass(frozen=True)
+class AmplifierLevel:
+    """How much of its range an amplifier uses on the bench: its expected peak (the largest |output|
+    over the prediction's runs) as a share of the reference, and that peak over the machine's noise
+    floor (amplifier noise and integrator offset together) in dB."""
+
+    amplifier: str
+    quantity: str
+    peak_V: float
+    peak_share: float
+    snr_dB: float
+
+    def as_dict(self) -> dict:
+        """Plain JSON-ready values."""
+        return {"amplifier": self.amplifier, "quantity": self.quantity, "peak_V": self.peak_V,
+                "peak_share": self.peak_share, "snr_dB": self.snr_dB}
+
+
+def noise_floor_V(machine: MachineProfile) -> float:
+    """The error voltage every amplifier of the machine carries whatever its signal: its noise (rms)
+    and an integrator's input offset, combined as independent errors."""
+    im = machine.imperfections
+    return math.hypot(im.amplifier_noise_V_rms, im.integrator_offset_V)
+
+
+def amplifier_levels(net: Netlist, machine: MachineProfile, peaks_V: dict[str, float]) -> tuple[AmplifierLevel, ...]:
+    """Each amplifier's expected peak and signal-to-noise ratio, in the netlist's order."""
+    floor = noise_floor_V(machine)
+    out = []
+    for a in net.amplifiers:
+        p = peaks_V.get(a.id, 0.0)
+        snr = 20 * math.log10(p / floor) if p > 0 and floor > 0 else math.inf
+        out.append(AmplifierLevel(a.id, a.carries.quantity, p, p / net.reference_V, snr))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
 class BenchPrediction:
     """What the sheet's 'Predicted on the bench' says: one prediction per scenario, the wired
     loop's poles with each actuator, and the corners of the bench's ranges (None without ranges)."""
@@ -33,6 +70,15 @@ class BenchPrediction:
     loops: tuple[LoopPoles, ...]
     corners: BenchStudy | None
     runs_hold: int
+    levels: tuple[AmplifierLevel, ...] = ()  # each amplifier's expected peak and signal-to-noise ratio
+
+    def peaks_V(self) -> dict[str, float]:
+        """Each amplifier's largest |output| over every scenario's runs (V, before the rails)."""
+        out: dict[str, float] = {}
+        for p in self.predictions:
+            for a, v in p.amp_peaks_V.items():
+                out[a] = max(out.get(a, 0.0), v)
+        return out
 
     @property
     def failing(self) -> tuple[Prediction, ...]:
@@ -52,6 +98,7 @@ class BenchPrediction:
                                "max_abs_theta_deg": p.max_theta_deg, "max_abs_s_m": p.max_s_m,
                                "overloads": p.overloads} for p in self.predictions],
                 "linear": [{"actuator": lp.actuator, "verdict": lp.verdict, "line": lp.line()} for lp in self.loops],
+                "amplifier_levels": [lv.as_dict() for lv in self.levels],
                 "bench_spread": None if self.corners is None else self.corners.as_dict()}
 
 
@@ -89,5 +136,6 @@ def predict_on_bench(d: Design, net: Netlist, machine: MachineProfile, bench: Be
     preds = predict(net, d.plant, bench, machine, runs_hold=runs_hold, done=done, bench_spread=spread)
     if spread and corners is None:
         corners = study(net, d.plant, bench, machine, load_scenario(HOLD_SCENARIO), corner_runs=runs_hold)
-    return BenchPrediction(tuple(preds), tuple(diagnose(net, d.plant, bench)), corners if spread else None,
+    pred = BenchPrediction(tuple(preds), tuple(diagnose(net, d.plant, bench)), corners if spread else None,
                            runs_hold)
+    return replace(pred, levels=amplifier_levels(net, machine, pred.peaks_V()))

@@ -56,6 +56,26 @@ def bench_section(pred: BenchPrediction, d: Design, machine: MachineProfile, ben
     return SheetSection("Predicted on the bench", header, rows, note, banner=failure_banner(bench.id, pred))
 
 
+LOW_SHARE = 0.1  # an amplifier whose expected peak is under this share of the reference is marked low
+
+
+def levels_section(pred: BenchPrediction, net: Netlist) -> SheetSection:
+    """'Signal levels on the bench': each amplifier's expected peak (the largest |output| over the
+    prediction's runs) as a share of the reference, and its signal-to-noise ratio over the
+    machine's noise floor; a signal under LOW_SHARE of the reference is marked."""
+    rows = [[lv.amplifier, lv.quantity, f"{100 * lv.peak_share:.1f} %",
+             "-" if lv.snr_dB == float("inf") else f"{lv.snr_dB:.0f}",
+             "low" if lv.peak_share < LOW_SHARE else ("past the reference" if lv.peak_share > 1 else "")]
+            for lv in pred.levels]
+    note = (f"The largest |output| of each amplifier over every run above, as a share of the reference "
+            f"(+/-{net.reference_V:g} V), and over the machine's noise floor (its amplifier noise and "
+            f"integrator offset together). A signal that uses little of its range carries the machine's "
+            f"noise, offsets and the dial's step at that much more weight; 'low' marks one under "
+            f"{100 * LOW_SHARE:g} %.")
+    return SheetSection("Signal levels on the bench", ["amplifier", "carries", "expected peak", "SNR (dB)", ""],
+                        rows, note)
+
+
 def prediction_rows(preds: Sequence[Prediction]) -> tuple[list[str], list[list[str]]]:
     """The predictions as a table for the patch sheet: (header, rows of text)."""
     header = ["scenario", "runs", "held", "limit switch (run 0)", "fallen (run 0)", "max |theta| (deg)",
@@ -130,7 +150,8 @@ def predicted_patch_files(d: Design, machine: MachineProfile, bench: BenchProfil
     """Every file of a patch (patchgen.render.patchfiles.PATCH_FILES), the bench prediction first
     on the sheet, then ``sections``; the patch judged as patched on the bench
     (patchgen.bench.diagnosis.as_patched_on_bench) on its margins page."""
-    return patch_files(d, machine, net, [bench_section(pred, d, machine, bench, net), *sections], judged)
+    return patch_files(d, machine, net, [bench_section(pred, d, machine, bench, net), *_levels(pred, net), *sections],
+                       judged)
 
 
 def patch_report_files(report: PatchReport, machine: MachineProfile, bench: BenchProfile) -> dict[str, str]:
@@ -140,5 +161,10 @@ def patch_report_files(report: PatchReport, machine: MachineProfile, bench: Benc
     if report.pending is None:
         return patch_files(d, machine, net, judged=report.judged)
     # the sheet's bench section last: the prediction is computed while the rest is rendered
-    return patch_files(d, machine, net, lambda: [bench_section(report.prediction, d, machine, bench, net)],
-                       report.judged)
+    return patch_files(d, machine, net, lambda: [bench_section(report.prediction, d, machine, bench, net),
+                                                 *_levels(report.prediction, net)], report.judged)
+
+
+def _levels(pred: BenchPrediction, net: Netlist) -> list[SheetSection]:
+    """The signal levels' section, when the prediction has them."""
+    return [levels_section(pred, net)] if pred.levels else []

@@ -42,6 +42,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from patchgen.patch.large_gains import PREFIX
 from patchgen.patch.realization import Realization, Term
 from patchgen.profiles.machine import MachineProfile
 
@@ -50,6 +51,25 @@ DIAL_SHARE = 0.01  # a pot whose dial step is more than this share of its settin
 FIXED = ("u_c",)  # blocks whose scale the bench fixes (the servo amplifier's input, 1 V per V)
 INSIDE = 1e-6  # relative: every limit is kept this far inside, so a coefficient at a limit stays within it
 STAGE_ONE_SLACK = 1e-9  # relative: stage 2 keeps stage 1's optimum to this (the solver's tolerance)
+
+
+@dataclass(frozen=True)
+class Scaling:
+    """The factor each block's voltage is multiplied by (1: kept) and, for each block scaled,
+    the limit that stopped it (in words, for the netlist's notes)."""
+
+    factors: dict[str, float]
+    why: dict[str, str]
+
+    @property
+    def changes(self) -> bool:
+        """Whether any block's scale moved."""
+        return any(f != 1.0 for f in self.factors.values())
+
+    def notes(self) -> list[str]:
+        """One line per block scaled: its factor and the limit it reached."""
+        return [f"{b} carried at {f:.3g} times its sensor-constant scale for signal-to-noise: {self.why[b]}"
+                for b, f in self.factors.items() if f != 1.0]
 
 
 @dataclass(frozen=True)
@@ -66,7 +86,7 @@ def dial_floor(machine: MachineProfile) -> float:
     return machine.pot_resolution / DIAL_SHARE
 
 
-def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: MachineProfile) -> dict[str, float]:
+def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: MachineProfile) -> Scaling:
     """The factor each block's voltage is multiplied by (1: kept), see the module docstring.
 
     Parameters
@@ -81,8 +101,8 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
 
     Returns
     -------
-    dict of str to float
-        Block name -> factor, for every block the realisation has.
+    Scaling
+        Block name -> factor for every block the realisation has, and why each scaled one stopped.
     """
     from scipy.optimize import linprog  # 0.1 s of import, only where a scaling is chosen
 
@@ -90,7 +110,7 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
     free = [b.name for b in real.blocks if b.name not in FIXED and peaks.get(b.name, BlockPeak(0, 0)).least > 0]
     out = {b.name: 1.0 for b in real.blocks}
     if not free:
-        return out
+        return Scaling(out, {})
     col = {name: i for i, name in enumerate(free)}
     n = len(free)  # variables: y_b for each free block, then t
     rows, rhs, eq_rows, eq_rhs = [], [], [], []
@@ -140,7 +160,7 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
     A, b_ub = np.array(rows), np.array(rhs)
     A_eq, b_eq = (np.array(eq_rows), np.array(eq_rhs)) if eq_rows else (None, None)
     if not gain[:n].any():
-        return out
+        return Scaling(out, {})
     if (gain[:n] > 0).any():  # stage 1: the worst share of the reference
         first = linprog(-row({n: 1.0}), A_ub=A, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds, method="highs")
         t_star = first.x[n]
@@ -151,7 +171,50 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
     y = second.x[:n]
     for name, v in zip(free, y):
         out[name] = math.exp(v)
-    return out
+    return Scaling(out, {b: _why(b, real, out, peaks, machine) for b in free if out[b] != 1.0})
+
+
+def _why(name: str, real: Realization, factors: dict[str, float], peaks: Mapping[str, BlockPeak],
+         machine: MachineProfile) -> str:
+    """The limits block ``name`` reached at its factor, in words."""
+    tight = 1e-5
+    said = []
+    if factors[name] * peaks[name].most >= HEADROOM * machine.reference_V * (1 - tight):
+        said.append(f"its predicted peak at {100 * HEADROOM:g} % of the reference")
+    top_c, floor = max(machine.input_weights) * machine.pot_max, dial_floor(machine)
+    for b in real.blocks:
+        if b.kind == "differentiate":
+            continue
+        for t in b.terms:
+            if name not in (b.name, t.signal) or b.name == t.signal or t.coeff == 0.0:
+                continue
+            c = abs(t.coeff) * factors.get(b.name, 1.0) / factors.get(t.signal, 1.0)
+            where = f"{b.name}'s coefficient on {t.signal}"
+            if abs(t.coeff) < top_c and c >= top_c * (1 - tight):
+                said.append(f"{where} at the largest weighted input ({top_c:g})")
+            elif abs(t.coeff) > floor and c <= floor * (1 + tight):
+                said.append(f"{where} at the dial floor ({floor:g})")
+    return "; ".join(said) or "with the least scaled signal's share of the reference"
+
+
+def block_of(quantity: str) -> str:
+    """The block an amplifier's signal belongs to: its own, its partial sum's or its gain stage's
+    (a gain stage scales with the signal it amplifies)."""
+    q = quantity.removeprefix("partial ")
+    head, sep, tail = q.rpartition(f"_{PREFIX}")
+    return head if sep and tail.replace(".", "", 1).isdigit() else q
+
+
+def block_peaks(real: Realization, amplifiers: Mapping[str, str], peaks_V: Mapping[str, float]) -> dict[str, BlockPeak]:
+    """Each block's BlockPeak from its amplifiers' predicted peaks (``amplifiers``: id -> the
+    quantity it carries, as the netlist says; ``peaks_V``: id -> V)."""
+    names = {b.name for b in real.blocks}
+    got: dict[str, list[float]] = {}
+    for a, quantity in amplifiers.items():
+        b = block_of(quantity)
+        if b in names and a in peaks_V:
+            got.setdefault(b, []).append(peaks_V[a])
+    return {b: BlockPeak(min(v), max(v)) for b, v in got.items()}
 
 
 def rescaled(real: Realization, scales: Mapping[str, float]) -> Realization:

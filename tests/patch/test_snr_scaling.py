@@ -71,7 +71,7 @@ def test_random_envelopes_keep_every_limit_and_reach_one(case, data):
     d, m, real = case
     peaks = {b.name: BlockPeak(*sorted(data.draw(st.tuples(*[st.floats(1e-3, 1.5 * m.reference_V)] * 2))))
              for b in real.blocks}
-    alpha = snr_scales(real, peaks, m)
+    alpha = snr_scales(real, peaks, m).factors
     assert set(alpha) == {b.name for b in real.blocks} and alpha["u_c"] == 1.0
     scaled = rescaled(real, alpha)
     _limits_hold(real, scaled, alpha, peaks, m)
@@ -88,7 +88,7 @@ def test_the_scaled_patch_wires_the_same_law(case):
     its signal at the new volts per unit."""
     d, m, real = case
     peaks = {b.name: BlockPeak(0.05 * m.reference_V, 0.1 * m.reference_V) for b in real.blocks}
-    alpha = snr_scales(real, peaks, m)
+    alpha = snr_scales(real, peaks, m).factors
     assert any(a > 1.5 for n, a in alpha.items() if n not in FIXED), alpha  # 10 % is far below the headroom
     plain, scaled = build_patch(d, m), build_patch(d, m, scales=alpha)
     g0, g1 = wired_law(plain).freqresp(W), wired_law(scaled).freqresp(W)
@@ -101,15 +101,30 @@ def test_the_scaled_patch_wires_the_same_law(case):
             assert a.carries.volts_per_unit == pytest.approx(vpu[q] * alpha[q], rel=1e-9), a.id
 
 
-def test_bench_recommended_in_hold_uses_twice_the_range():
+def test_bench_recommendeds_actuator_state_uses_twice_the_range():
     """The measured envelope of bench-recommended on uw-1991 (offset-10deg, the largest of the
     standard scenarios for both blocks: the actuator state 1.28 V, theta_dot 4.16 V): the actuator
     state doubles (its u_c input then at the x10 input's top), theta_dot rises to HEADROOM."""
     d, _ = design_from_path(design_path("bench-recommended"))
     m = load_machine("gp6")
     real = realize(d, m)
-    alpha = snr_scales(real, {"actuator": BlockPeak(1.28, 1.28), "theta_dot": BlockPeak(4.16, 4.16)}, m)
+    scaling = snr_scales(real, {"actuator": BlockPeak(1.28, 1.28), "theta_dot": BlockPeak(4.16, 4.16)}, m)
+    alpha = scaling.factors
+    assert scaling.why == {"actuator": "actuator's coefficient on u_c at the largest weighted input (10)",
+                           "theta_dot": "its predicted peak at 80 % of the reference"}
     assert alpha["actuator"] == pytest.approx(2.0, rel=1e-5)
     assert alpha["theta_dot"] * 4.16 == pytest.approx(HEADROOM * m.reference_V, rel=1e-5)
     u_c = rescaled(real, alpha).block("u_c")
     assert math.isclose(abs(next(t.coeff for t in u_c.terms if t.signal == "actuator")), 3.5201 / 2, rel_tol=1e-3)
+
+
+def test_an_amplifier_belongs_to_its_block_its_partial_sums_and_its_gain_stages():
+    from patchgen.patch.snr_scaling import block_of, block_peaks
+
+    assert [block_of(q) for q in ("actuator", "partial u_c", "theta_x1.42", "xhat_theta_x12", "c2_in")] == \
+        ["actuator", "u_c", "theta", "xhat_theta", "c2_in"]
+    d, _ = design_from_path(design_path("bench-recommended"))
+    real = realize(d, load_machine("gp6"))
+    got = block_peaks(real, {"A1": "actuator", "A5": "theta_dot", "A6": "u_c", "A7": "partial u_c", "A9": "theta_x2"},
+                      {"A1": 1.0, "A5": 4.0, "A6": 6.0, "A7": 7.0, "A9": 9.0})
+    assert got == {"actuator": BlockPeak(1.0, 1.0), "theta_dot": BlockPeak(4.0, 4.0), "u_c": BlockPeak(6.0, 7.0)}

@@ -81,15 +81,12 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
     list of Prediction
         One per scenario, in order.
     """
+    runs_of = standard_runs(net, plant, bench, machine, runs_hold, scenarios, done, bench_spread)
+
     def one(sc: Scenario) -> Prediction:
-        name = sc.name  # a file's stem, or the name it gives itself
-        runs = runs_hold if name == "hold-120s" else 1
-        if done is not None and len(done.get(name, ())) >= runs:
-            summaries = done[name][:runs]
-        else:
-            summaries = _side_by_side(lambda first, n: simulate(net, plant, bench, machine, sc, runs=n, first_run=first,
-                                                                keep_history=False, bench_spread=bench_spread).runs,
-                                      runs)
+        name = sc.name
+        summaries = runs_of[name]
+        runs = len(summaries)
         r0 = summaries[0]
         ovl = sorted({o.amplifier for run in summaries for o in run.overloads})
         return Prediction(name, sc.description, runs, sum(r.held for r in summaries) / runs, r0.trip_time_s,
@@ -97,9 +94,25 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
                           max(x.max_abs_s_m for x in summaries), ", ".join(ovl) or "none",
                           {a: max(x.amp_peak(a) for x in summaries) for a, _ in r0.amp_peaks_V})
 
+    return [one(sc) for sc in (load_scenario(given) for given in scenarios or bench_scenarios(bench))]
+
+
+def standard_runs(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
+                  runs_hold: int = 20, scenarios: tuple[str, ...] | None = None,
+                  done: dict[str, list[RunSummary]] | None = None,
+                  bench_spread: bool = False) -> dict[str, list[RunSummary]]:
+    """The runs :func:`predict` sums up, by scenario name: ``runs_hold`` noise seeds of the long
+    hold, one run of each other scenario at its own seed (``done``'s where it has them), side by
+    side on the cores (the engine releases the interpreter), the long hold first."""
+    def one(sc: Scenario) -> list[RunSummary]:
+        runs = runs_hold if sc.name == "hold-120s" else 1
+        if done is not None and len(done.get(sc.name, ())) >= runs:
+            return done[sc.name][:runs]
+        return _side_by_side(lambda first, n: simulate(net, plant, bench, machine, sc, runs=n, first_run=first,
+                                                       keep_history=False, bench_spread=bench_spread).runs, runs)
+
     loaded = [load_scenario(given) for given in scenarios or bench_scenarios(bench)]
-    # side by side, the long hold first, so that the short scenarios fill the other cores
     order = sorted(range(len(loaded)), key=lambda i: loaded[i].name != "hold-120s")
     with ThreadPoolExecutor(max(1, min(len(loaded), numba.get_num_threads()))) as pool:
         futures = {i: pool.submit(one, loaded[i]) for i in order}
-        return [futures[i].result() for i in range(len(loaded))]
+        return {loaded[i].name: futures[i].result() for i in range(len(loaded))}

@@ -155,6 +155,10 @@ class PatchSpec(InputModel):
     below_resolution: Literal["round", "minimum", "omit"] = Field(
         default="round", description="a coefficient below the pot resolution: round to the dial, "
         "set the minimum dial value, or leave the signal out")
+    scaling: Literal["snr", "sensors"] = Field(
+        default="snr", description="the law as its states: each internal signal's voltage raised as far "
+        "as the bench Monte Carlo's envelope and the machine's inputs and dial allow (\"snr\"), or kept at "
+        "its sensor constants (\"sensors\")")
 
 
 class DesignSpec(InputModel):

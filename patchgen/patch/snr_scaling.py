@@ -126,8 +126,8 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
     for name in free:
         p = peaks[name]
         top = math.log(HEADROOM * ref / p.most) + math.log1p(-INSIDE)
-        if top >= 0.0:
-            bounds.append((0.0, top))
+        if p.most <= HEADROOM * ref:
+            bounds.append((0.0, max(0.0, top)))
             rows.append(row({col[name]: -1.0, n: 1.0}))  # t <= ln(least / ref) + y_b
             rhs.append(math.log(p.least / ref))
             gain[col[name]] = 1.0

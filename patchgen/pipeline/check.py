@@ -6,12 +6,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from patchgen.design.lqg import design_on
-from patchgen.patch.build import build_patch
 from patchgen.patch.fault_finding import Verdict, diagnose_readings
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readings import load_readings
 from patchgen.patch.static_check import StaticCheck, static_check
 from patchgen.pipeline.inputs import Inputs
+from patchgen.pipeline.scaling import scaled_patch
 
 
 @dataclass(frozen=True)
@@ -36,7 +36,7 @@ def run_check(inputs: Inputs, readings_path: str) -> CheckReport:
     """Patch the spec, read the filled static check at ``readings_path`` against it, and rank the
     single faults (a wrong pot, cord or sign) by how well each explains the readings."""
     spec, machine, bench = inputs
-    net = build_patch(design_on(spec, machine, bench), machine)
+    net = scaled_patch(design_on(spec, machine, bench), machine, bench).netlist
     check = static_check(net, machine)
     measured = load_readings(readings_path, check, machine)
     return CheckReport(net, check, diagnose_readings(net, machine, check, measured))

@@ -9,11 +9,11 @@ from dataclasses import dataclass, field
 from patchgen.bench.diagnosis import as_patched_on_bench
 from patchgen.design.lqg import Design, design_on
 from patchgen.patch.as_patched import AsPatched
-from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
 from patchgen.pipeline.prediction import HOLD_RUNS, BenchPrediction
 from patchgen.pipeline.prediction_worker import PredictionWorker
+from patchgen.pipeline.scaling import scaled_patch
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,8 @@ class PatchReport:
 
 
 def run_patch(inputs: Inputs, plan: PatchPlan = PatchPlan()) -> PatchReport:
-    """Design, scale and allocate the spec on its machine; judge the patch as patched; predict it.
+    """Design, scale and allocate the spec on its machine (each signal raised for signal-to-noise
+    over the bench's envelope, patchgen.pipeline.scaling); judge the patch as patched; predict it.
 
     Parameters
     ----------
@@ -69,11 +70,14 @@ def run_patch(inputs: Inputs, plan: PatchPlan = PatchPlan()) -> PatchReport:
     worker = PredictionWorker() if plan.predict else None  # its simulator starts while the patch is made
     try:
         d = design_on(spec, machine, bench)
-        net = build_patch(d, machine)
+        # the envelope simulated by the worker, whose simulator started with this command (without one, here)
+        scaled = scaled_patch(d, machine, bench, runs_of=None if worker is None else
+                              lambda n: worker.envelope(d, n, machine, bench).result())
+        net, runs = scaled.netlist, scaled.runs
         judged = as_patched_on_bench(d, net, machine, bench)
     except BaseException:
         if worker is not None:
             worker.cancel()
         raise
-    pending = None if worker is None else worker.predict(d, net, machine, bench, plan.runs_hold)
+    pending = None if worker is None else worker.predict(d, net, machine, bench, plan.runs_hold, runs)
     return PatchReport(d, net, judged, pending)

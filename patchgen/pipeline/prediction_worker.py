@@ -24,6 +24,7 @@ from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPool
 from patchgen.design.lqg import Design
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.prediction import BenchPrediction, predict_on_bench
+from patchgen.pipeline.scaling import envelope_runs
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
@@ -41,7 +42,8 @@ def _start_simulator() -> None:
 
 
 class PredictionWorker:
-    """A worker that starts the simulator now and predicts one patch later (:meth:`predict`)."""
+    """A worker that starts the simulator now, may simulate a patch's envelope for its scaling
+    (:meth:`envelope`), and predicts one patch later (:meth:`predict`)."""
 
     def __init__(self) -> None:
         self._pool: Executor
@@ -55,10 +57,15 @@ class PredictionWorker:
                 pass
         self._pool = ThreadPoolExecutor(1, thread_name_prefix="bench-prediction")
 
+    def envelope(self, d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile) -> Future:
+        """The runs a patch's signal-to-noise scaling is taken over (patchgen.pipeline.scaling.envelope_runs)."""
+        return self._pool.submit(envelope_runs, d, net, machine, bench)
+
     def predict(self, d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile,
-                runs_hold: int) -> Future[BenchPrediction]:
-        """The prediction of ``net`` (see predict_on_bench), to be waited for; the worker ends with it."""
-        pending = self._pool.submit(predict_on_bench, d, net, machine, bench, runs_hold)
+                runs_hold: int, done: dict | None = None) -> Future[BenchPrediction]:
+        """The prediction of ``net`` (see predict_on_bench; ``done``: runs of it already made), to be
+        waited for; the worker ends with it."""
+        pending = self._pool.submit(predict_on_bench, d, net, machine, bench, runs_hold, done)
         self._pool.shutdown(wait=False)
         return pending
 

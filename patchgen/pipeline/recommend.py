@@ -5,14 +5,15 @@ sheet, reusing the runs the ranking already made."""
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from patchgen.bench.diagnosis import as_patched_on_bench
-from patchgen.bench.prediction import STANDARD
+from patchgen.bench.prediction import STANDARD, standard_runs
 from patchgen.inputs.scenario import Scenario, load_scenario
 from patchgen.patch.as_patched import AsPatched
 from patchgen.pipeline.inputs import Inputs
 from patchgen.pipeline.prediction import BenchPrediction, predict_on_bench
+from patchgen.pipeline.scaling import ENVELOPE_RUNS, scaled_patch
 from patchgen.studies.candidate import Candidate, Recommendation
 from patchgen.studies.recommend import RUNS, recommend
 
@@ -78,7 +79,15 @@ def run_recommend(inputs: Inputs, scenarios: Sequence[Scenario], plan: Recommend
     best = rec.best
     if best is None:
         return RecommendReport(rec, None, None)
+    done = reusable_runs(rec, best)
+    scaled = scaled_patch(best.design, machine, bench, best.netlist, runs_of=lambda net: standard_runs(
+        net, best.design.plant, bench, machine, ENVELOPE_RUNS, done=done, bench_spread=bool(bench.uncertainty.ranges)))
+    if scaled.netlist is not best.netlist:  # the chosen patch as patchgen patch gives it (ranked at its sensor
+        best = replace(best, netlist=scaled.netlist)  # constants), so the sheet's prediction is of it, run again
+        rec = replace(rec, ranked=(best, *rec.ranked[1:]))
+        done, corners = {}, None
+    else:
+        corners = best.bench_study
     judged = as_patched_on_bench(best.design, best.netlist, machine, bench)
-    pred = predict_on_bench(best.design, best.netlist, machine, bench, done=reusable_runs(rec, best),
-                            corners=best.bench_study)
+    pred = predict_on_bench(best.design, best.netlist, machine, bench, done=done, corners=corners)
     return RecommendReport(rec, judged, pred)

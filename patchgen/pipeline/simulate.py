@@ -13,9 +13,9 @@ from patchgen.bench.simulate import simulate
 from patchgen.design.lqg import design_on
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
-from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
+from patchgen.pipeline.scaling import scaled_patch
 from patchgen.profiles.bench import BenchProfile
 from patchgen.studies import bench_corners
 
@@ -90,7 +90,7 @@ def run_simulate(inputs: Inputs, scenario: Scenario, plan: SimulatePlan,
     if plan.bench_spread and not bench.uncertainty.ranges:
         raise InputError("bench_spread", "", f"the bench {bench.id} states no [uncertainty] ranges")
     d = design_on(spec, machine, bench)
-    net = build_patch(d, machine)
+    net = scaled_patch(d, machine, bench).netlist
     plant = d.plant
     result = simulate(net, plant, bench, machine, scenario, seed=plan.seed, runs=plan.runs, ideal=plan.ideal,
                       spread=plan.spread, bench_spread=plan.bench_spread, progress=progress)

@@ -14,9 +14,9 @@ from patchgen.bench.noise_drift import noise_and_drift
 from patchgen.bench.simulate import simulate
 from patchgen.design.lqg import Design, design_on
 from patchgen.inputs.scenario import Scenario
-from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
+from patchgen.pipeline.scaling import scaled_patch
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
@@ -92,7 +92,7 @@ def spice_job(inputs: Inputs, scenario: Scenario, plan: SpicePlan) -> SpiceJob:
     profiles or, ideal, with noise and drift off and the actuator a pure gain)."""
     spec, machine, bench = inputs
     d = design_on(spec, machine, bench)
-    net = build_patch(d, machine)
+    net = scaled_patch(d, machine, bench).netlist
     plant = d.plant
     levels = noise_and_drift([s.id for s in net.sensors], bench, machine, scenario, plan.ideal)
     settings = SpiceSettings(duration_s=scenario.duration_s, step_s=plan.step_s,

@@ -9,10 +9,10 @@ from dataclasses import asdict, dataclass
 from patchgen.bench.diagnosis import as_patched_on_bench
 from patchgen.design.lqg import Design, design_on
 from patchgen.patch.as_patched import AsPatched
-from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
 from patchgen.pipeline.prediction import BenchPrediction, predict_on_bench
+from patchgen.pipeline.scaling import scaled_patch
 from patchgen.plant.equations import PlantParams
 from patchgen.swingup.manoeuvre import BENCH_HOLD_S, Manoeuvre, manoeuvre
 from patchgen.swingup.run import StrategySummary, compare_strategies
@@ -104,7 +104,7 @@ def run_swingup(inputs: Inputs, plan: SwingupPlan, comparing=None) -> SwingupRep
     """
     spec, machine, bench = inputs
     d = design_on(spec, machine, bench)
-    net = build_patch(d, machine)
+    net = scaled_patch(d, machine, bench).netlist
     plant = d.plant
     force = plan.force_limit_N or bench.actuator.force_limit_N
     m = manoeuvre(net, plant, bench, machine, d.K[:, :4], plan.strategy, force, plan.hold_s, plan.seed)

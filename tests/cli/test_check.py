@@ -11,10 +11,11 @@ import pytest
 from click.testing import CliRunner
 
 from patchgen.cli import cli
-from patchgen.patch.build import build_patch
 from patchgen.patch.fault_finding import diagnose_readings, predict
 from patchgen.patch.readings import reading_limit_V
 from patchgen.patch.static_check import static_check, wires_of
+from patchgen.pipeline.scaling import scaled_patch
+from patchgen.profiles.bench import load_bench
 from tests.conftest import design_from_path, design_path
 
 
@@ -24,7 +25,7 @@ def patched(tmp_path_factory):
     r = CliRunner().invoke(cli, ["patch", "bench-recommended", "-o", str(out), "--no-predict"])
     assert r.exit_code == 0, r.output
     d, m = design_from_path(design_path("bench-recommended"))
-    net = build_patch(d, m)
+    net = scaled_patch(d, m, load_bench(d.spec.bench)).netlist  # the patch every command builds
     return out / "static-check.csv", net, m, static_check(net, m)
 
 
@@ -63,7 +64,7 @@ def test_correct_readings_agree(patched, tmp_path):
 @pytest.mark.parametrize("fault, expect", [
     ("P4 at 0.815", "P4 set to about 0.815 instead of 0.915"),
     ("P3 fed from theta", "A7 x1a: P3 fed from theta instead of s"),
-    ("P6 reversed", "A8 x10a (P6): sign reversed"),
+    ("P6 reversed", "A8 x1a (P6): sign reversed"),
 ])
 def test_a_wrong_patch_names_its_fault_first(patched, tmp_path, fault, expect):
     path, net, m, check = patched

@@ -45,6 +45,14 @@ def test_design_loads_neither_the_simulator_nor_plotting():
 
 
 def test_patch_without_prediction_loads_no_simulator_and_no_matplotlib(tmp_path):
-    _, mods = loaded("patch", "bench-recommended", "-o", str(tmp_path / "p"), "--no-predict")
+    """A spec that keeps its sensor constants simulates nothing without the prediction; one scaled
+    for signal-to-noise (the default) simulates its envelope, and solves for its scales, even then."""
+    from tests.conftest import design_path
+
+    spec = tmp_path / "sensors.toml"
+    spec.write_text(design_path("bench-recommended").read_text() + '\n[patch]\nscaling = "sensors"\n')
+    _, mods = loaded("patch", str(spec), "-o", str(tmp_path / "p"), "--no-predict")
     assert "schemdraw" in mods
     assert not mods & {"numba", "matplotlib", "scipy.optimize", "control"}
+    _, mods = loaded("patch", "bench-recommended", "-o", str(tmp_path / "q"), "--no-predict")
+    assert {"numba", "scipy.optimize"} <= mods and not mods & {"matplotlib", "control"}

@@ -25,12 +25,12 @@ def check_argv(path: str = READ, *extra: str) -> tuple[str, ...]:
 def good_readings() -> str:
     """bench-recommended's static-check.csv with measured_V = expected_V on every row."""
     from patchgen.design.lqg import design_on
-    from patchgen.patch.build import build_patch
     from patchgen.patch.static_check import static_check, static_check_csv
     from patchgen.pipeline.inputs import load_inputs
+    from patchgen.pipeline.scaling import scaled_patch
 
     sp, machine, bench = load_inputs("bench-recommended")
-    net = build_patch(design_on(sp, machine, bench), machine)
+    net = scaled_patch(design_on(sp, machine, bench), machine, bench).netlist  # the patch check builds
     rows = list(csv.reader(io.StringIO(static_check_csv(static_check(net, machine)))))
     out = io.StringIO()
     csv.writer(out, lineterminator="\n").writerows([rows[0]] + [r[:-1] + [r[2]] for r in rows[1:]])

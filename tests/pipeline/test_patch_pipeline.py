@@ -9,13 +9,16 @@ from patchgen.design.lqg import design_on
 from patchgen.patch.build import build_patch
 from patchgen.pipeline.inputs import load_inputs
 from patchgen.pipeline.patch import PatchPlan, run_patch
+from patchgen.pipeline.scaling import scaled_patch
 
 
 def test_the_report_is_the_stages_patch_and_prediction():
     inputs = load_inputs("bench-recommended")
     spec, machine, bench = inputs
     bare = run_patch(inputs, PatchPlan(predict=False))
-    net = build_patch(design_on(spec, machine, bench), machine)
+    d = design_on(spec, machine, bench)
+    net = scaled_patch(d, machine, bench).netlist
+    assert net != build_patch(d, machine)  # scaled for signal-to-noise over the bench's envelope
     assert bare.netlist == net and bare.prediction is None
     assert bare.summary()["prediction"] is None and bare.summary()["margins"] == bare.judged.as_dict()
     report = run_patch(inputs, PatchPlan(runs_hold=3))

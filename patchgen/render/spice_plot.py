@@ -15,9 +15,10 @@ _UNITS = {**{q: (u.replace("rad", "deg"), 180.0 / math.pi) if u.startswith("rad"
 
 
 def comparison_plot(cmp: Comparison, stem: str, title: str = "", own_label: str = "patchgen",
-                    svg: bool = False) -> dict[str, bytes]:
+                    svg: bool = False, panel_note: str = "") -> dict[str, bytes]:
     """Overlay plot of each compared signal (ngspice dashed over patchgen's), as ``<stem>.png``
-    (and a deterministic ``<stem>.svg`` with ``svg``), file name -> bytes."""
+    (and a deterministic ``<stem>.svg`` with ``svg``), file name -> bytes. ``title`` may run over
+    several lines; ``panel_note`` ends each panel's line of differences."""
     from patchgen.render import plotting
 
     names = list(cmp.signals)
@@ -25,7 +26,8 @@ def comparison_plot(cmp: Comparison, stem: str, title: str = "", own_label: str 
     cmp = Comparison(cmp.t[pick], {k: v[pick] for k, v in cmp.spice.items()},
                      {k: v[pick] for k, v in cmp.own.items()}, cmp.signals)
     height = 2.4 * len(names)
-    fig, axes = plotting.stacked(7.0, height, len(names), top_in=0.6 if title else 0.35, left_in=0.85,
+    top = 0.35 + 0.25 * (title.count("\n") + 1) if title else 0.35  # a quarter inch a title line
+    fig, axes = plotting.stacked(7.0, height, len(names), top_in=top, left_in=0.85,
                                  hspace=0.35 * 2.4 / 1.9)
     cols = plotting.columns(fig, dpi=PLOT_DPI)
     for ax, name in zip(axes, names):
@@ -39,7 +41,7 @@ def comparison_plot(cmp: Comparison, stem: str, title: str = "", own_label: str 
                 ax.plot(*plotting.envelope(cmp.t, run[name] * scale, cols), label=label, **style)
         ax.set_ylabel(plotting.THETA_LABEL if name == ANGLE else f"{name} ({unit})" if unit else name)
         ax.set_title(f"{name}: RMS diff {100 * a.rms_rel:.3f} %, max diff {100 * a.max_rel:.3f} % "
-                     f"of peak", fontsize=9, loc="left")
+                     f"of peak{panel_note}", fontsize=9, loc="left")
         ax.grid(True, alpha=0.3)
         plotting.legend_above(ax, fontsize=8)
     axes[-1].set_xlabel("time (s)")

@@ -69,7 +69,9 @@ class SpiceSettings:
     ``actuator`` "bench" uses the bench profile's actuator (lag, dead zone, force limit, limit
     switches); "ideal" is F = K_U u_c. ``max_step_s`` bounds ngspice's time step (default: the
     output step). ``disturbances`` are the scenario's pushes (on the cart or the pendulum tip) and
-    cart-position steps, as sources.
+    cart-position steps, as sources. ``noise_step_s`` is the step of the simulator the noisy run
+    is judged against: no noise source carries a band above its Nyquist frequency (0: each its
+    own band, patchgen.spice.noise.noise_source).
     """
 
     duration_s: float
@@ -81,6 +83,7 @@ class SpiceSettings:
     seed: int = 1
     reltol: float = 1e-5
     disturbances: tuple[Disturbance, ...] = ()
+    noise_step_s: float = 0.0
 
 
 def _source_node(reading: Reading, source: str) -> str:
@@ -118,7 +121,7 @@ def _sensors(d: DeckLines, net: Netlist, bench: BenchProfile, machine: MachinePr
         d.add(f"B_sens_{spice_name(s.id)} {clean} 0 V = {volts}")
         if rms > 0:
             noise_source(d, f"E_sens_{spice_name(s.id)}_noise", node, clean, rms,
-                          levels.sensor_bandwidth_Hz, settings.duration_s)
+                          levels.sensor_bandwidth_Hz, settings.duration_s, settings.noise_step_s)
 
 
 def _velocity_filter(d: DeckLines, rate: str, f, x0) -> str:
@@ -175,7 +178,8 @@ def _amplifier(d: DeckLines, net: Netlist, reading: Reading, amp: Amplifier, mac
           f"R_{n}_o {core} {fb} {num(max(c.opamp_output_resistance_ohm, 1e-3))}",
           f"B_{n}_bound {fb} {sj} I = {bound(f'v({fb})', vsat, c.feedback_resistor_ohm)}")
     if rms > 0:
-        noise_source(d, f"E_{n}_noise", out, fb, rms, levels.amplifier_bandwidth_Hz, settings.duration_s)
+        noise_source(d, f"E_{n}_noise", out, fb, rms, levels.amplifier_bandwidth_Hz, settings.duration_s,
+                     settings.noise_step_s)
     if offset:
         d.add(f"V_{n}_offset {plus} 0 DC {num(offset)}")
     if bias:
@@ -326,7 +330,8 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     d.comment(f"Control voltage u_c = output of {reading.output}")
     d.add(f"V_uc {CONTROL_NODE} {_source_node(reading, reading.output)} DC 0")
     actuator(d, plant, bench, settings.actuator == "ideal")
-    pushes = random_forces(d, disturbances(d, settings.disturbances), levels, settings.duration_s)
+    pushes = random_forces(d, disturbances(d, settings.disturbances), levels, settings.duration_s,
+                           settings.noise_step_s)
     cart_pendulum(d, with_rotor(plant, motor_of(bench.actuator)), settings.x0, pushes)
 
     max_step = settings.max_step_s or settings.step_s

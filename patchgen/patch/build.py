@@ -6,7 +6,7 @@ from dataclasses import replace
 
 from patchgen.design.lqg import Design
 from patchgen.inputs.errors import Cure, InputError, ResourceError
-from patchgen.patch import compensator_fit
+from patchgen.patch import compensator_fit, differences
 from patchgen.patch.allocation import allocate
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.parts import parts_for
@@ -69,7 +69,7 @@ def _build(design: Design, machine: MachineProfile, units: int | str | None) -> 
     tries = list(range(1, cap + 1)) if units == "auto" else [units]
     if spec.patch.realization == "compensator" and design.controller is not None:
         return _place_compensator(design, machine, tries)  # plain state feedback has no other form
-    real = realize(design, machine)
+    real = differences.without_differentiators(realize(design, machine), machine)
     _check_law_reaches_pots(real, machine, spec)
     for n in tries:
         try:

@@ -30,7 +30,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 # changes; the memory held between collections is a few megabytes at most.
 GC_FIRST_THRESHOLD = 10_000
 
-COMMANDS = ("design", "patch", "check", "simulate", "spice", "recommend", "swingup", "sweep", "identify",
+COMMANDS = ("design", "patch", "check", "simulate", "spice", "export", "recommend", "swingup", "sweep", "identify",
             "bench-test", "examples")
 
 def command_help(name: str) -> str:

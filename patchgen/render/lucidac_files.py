@@ -3,9 +3,8 @@ library, and a table of which element carries what with every coefficient beside
 
 from __future__ import annotations
 
-import json
-
 from patchgen.pipeline.export import ExportReport
+from patchgen.render.outputs import json_text
 
 CONFIG = "lucidac-config.json"
 SCRIPT = "run_lucidac.py"
@@ -15,7 +14,7 @@ EXPORT_FILES = (CONFIG, SCRIPT, TABLE)
 
 def export_files(report: ExportReport) -> dict[str, str]:
     """File name -> text, the same bytes for the same spec."""
-    return {CONFIG: json.dumps(report.config, indent=2, sort_keys=True) + "\n",
+    return {CONFIG: json_text(report.config),
             SCRIPT: run_script(report), TABLE: table(report)}
 
 

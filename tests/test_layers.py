@@ -35,9 +35,10 @@ DEPENDS = {  # each folder's direct foundations: data below, presentation (rende
     "bench": ("patch",),
     "identify": ("bench",),
     "spice": ("bench",),
+    "lucidac": ("bench",),
     "swingup": ("bench",),
     "studies": ("bench",),
-    "pipeline": ("identify", "spice", "swingup", "studies"),
+    "pipeline": ("identify", "spice", "lucidac", "swingup", "studies"),
     "render": ("pipeline",),
     "cli": ("render",),
 }

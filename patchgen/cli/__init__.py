@@ -30,7 +30,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 # changes; the memory held between collections is a few megabytes at most.
 GC_FIRST_THRESHOLD = 10_000
 
-COMMANDS = ("design", "patch", "check", "simulate", "spice", "recommend", "swingup", "sweep", "identify",
+COMMANDS = ("design", "patch", "check", "simulate", "spice", "export", "recommend", "swingup", "sweep", "identify",
             "bench-test", "examples")
 
 def command_help(name: str) -> str:
@@ -91,6 +91,7 @@ def cli() -> None:
     patchgen check SPEC --readings F  static check readings: agree, or the fault
     patchgen simulate SPEC --scenario X -o DIR    the patched circuit on the bench
     patchgen spice SPEC --scenario X -o DIR       the patch checked by ngspice
+    patchgen export SPEC --machine lucidac -o DIR the LUCIDAC's configuration
     patchgen recommend SPEC -o DIR    every realisation on the bench, the best
     patchgen swingup SPEC -o DIR      pump-up, hand-off, hold with the patch
     patchgen sweep SPEC               gains, margins, pots with parameters off 10%
@@ -101,8 +102,8 @@ def cli() -> None:
     \b
     SPEC is a TOML file or a shipped design by name (bench-recommended,
     thesis-ch5, thesis-case1, ...); --scenario likewise (hold-120s, ...);
-    --machine another machine than the spec's (gp6, the-analog-thing, or
-    a machine profile's TOML file).
+    --machine another machine than the spec's (gp6, the-analog-thing,
+    lucidac, or a machine profile's TOML file).
     """
 
 

@@ -13,6 +13,10 @@ Coefficient magnitudes go on the smallest input weight w (the profile's, e.g. x1
 |c| <= w * pot_max, through a pot set to |c|/w; a coefficient equal to a weight needs no pot; one
 above the largest weight is split across inputs or carried by a gain stage
 (patchgen.patch.large_gains), an error only when neither fits.
+
+A machine whose coefficients carry their sign (``signed_coefficients``: the LUCIDAC's coefficient
+matrix) needs no polarity search: every block is at polarity +1 and an input is marked
+``negated`` where its coefficient's sign asks for it, so no inverter or pre-summer is placed.
 """
 
 from __future__ import annotations
@@ -148,8 +152,11 @@ def _place(real: Realization, blocks: list[Block], kept: dict[str, list[Term]], 
            machine: MachineProfile, source: str) -> Netlist:
     """Polarities, inverters and pre-summers for the blocks' terms, then the amplifiers and pots."""
     _check_lower_bound(blocks, kept, machine, source)
-    P, inverted, pre = polarity.search(blocks, kept, machine)
-    inverted = _unit_inverters(blocks, kept, P, inverted, pre, machine)
+    if machine.signed_coefficients:  # each input carries its sign: every block at +1, no inverters
+        P, inverted = {b.name: 1 for b in blocks}, set()
+    else:
+        P, inverted, pre = polarity.search(blocks, kept, machine)
+        inverted = _unit_inverters(blocks, kept, P, inverted, pre, machine)
     stages: list[_Stage] = []
     wanted: dict[tuple[str, str, float], float] = {}
     for b in blocks:
@@ -157,7 +164,7 @@ def _place(real: Realization, blocks: list[Block], kept: dict[str, list[Term]], 
         for t in kept[b.name]:
             need = -P[b.name] * (1 if t.coeff > 0 else -1)
             have = P.get(t.signal, 1)
-            if have == need:
+            if have == need or machine.signed_coefficients:
                 direct.append((t.signal, have, t.coeff))
             elif t.signal in inverted:
                 direct.append((f"inv:{t.signal}", -have, t.coeff))
@@ -272,7 +279,7 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                 mag = abs(c)
                 w = weight_for(mag, machine)
                 setting = None if not _needs_pot(mag, machine) else mag / w
-            jack = f"x{w}{'abcdefgh'[used[w]]}"
+            jack = f"x{w}{_jack_letter(used[w])}"
             used[w] += 1
             slot_def = next(a for a in machine.amplifiers if a.id == slot[st.key])
             if used[w] > (have := slot_def.input_count(w)):
@@ -290,7 +297,10 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                 pots.append(Pot(id=pot_id, setting=q, source=src_id(sk), amplifier=slot[st.key], jack=jack,
                                 weight=w, signal=_signal_name(sk, P), coefficient=design, realized=realized,
                                 note=_pot_note(design, c, machine.procedure.pot_reading)))
-            inputs.append(AmpInput(source=src_id(sk), pot=pot_id, weight=w, jack=jack))
+            # on a machine with signed coefficients every block is at +1: an input whose term is
+            # positive is negated, so the inverting element gives +c v (summer -(-w k v), integrator too)
+            negated = machine.signed_coefficients and c is not None and c > 0
+            inputs.append(AmpInput(source=src_id(sk), pot=pot_id, weight=w, jack=jack, negated=negated))
         b = st.block
         quantity = st.out_signal
         if b is not None:
@@ -319,6 +329,12 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                    pot_resolution=res, sensors=sensors, amplifiers=amps, pots=pots,
                    output=ControlOutput(source=slot["u_c"], K_U_N_per_V=real.K_U),
                    operation=operation, notes=list(real.notes) + notes)
+
+
+def _jack_letter(n: int) -> str:
+    """The n-th input jack of a weight: a ... z, then aa, ab ... (a programmed machine's element
+    sums as many lanes as it is given)."""
+    return chr(97 + n) if n < 26 else chr(96 + n // 26) + chr(97 + n % 26)
 
 
 def _rate_words(b: Block, t: Term, machine: MachineProfile) -> str:

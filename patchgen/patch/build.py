@@ -7,7 +7,7 @@ from dataclasses import replace
 
 from patchgen.design.lqg import Design
 from patchgen.inputs.errors import Cure, InputError, ResourceError
-from patchgen.patch import compensator_fit
+from patchgen.patch import compensator_fit, differences
 from patchgen.patch.allocation import allocate
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.parts import parts_for
@@ -78,6 +78,7 @@ def _build(design: Design, machine: MachineProfile, units: int | str | None,
     real = realize(design, machine)
     if scales:
         real = rescaled(real, scales)
+    real = differences.without_differentiators(real, machine)
     _check_law_reaches_pots(real, machine, spec)
     for n in tries:
         try:

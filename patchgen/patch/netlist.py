@@ -6,7 +6,8 @@ integrator's ``mode``, its rate k0 and how it is selected). Ideal meaning of eac
 input weight 1 or 10; ``T`` the integrator's time scale 1/k0 of its mode, or the netlist's
 ``time_scale_s`` for an integrator that names no mode):
 
-- summer, inverter: ``out = -sum_j w_j k_j v_j``
+- summer, inverter: ``out = -sum_j w_j k_j v_j`` (``w_j`` is negative for an input marked
+                    ``negated``, on a machine whose coefficients carry their sign)
 - integrator:       ``d(out)/dt = -(1/T) sum_j w_j k_j v_j``, ``out(0) = ic_V``
 - differentiator:   ``rolloff_s * d(out)/dt + out = -T_d_s * d/dt(sum_j w_j k_j v_j)``
 - lag:              ``tau_s * d(out)/dt + out = -sum_j w_j k_j v_j`` (an integrator with
@@ -26,7 +27,7 @@ import re
 from pathlib import Path
 from typing import Literal, NamedTuple
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_serializer
 
 SCHEMA_ID = "patchgen.netlist/3"
 
@@ -63,6 +64,16 @@ class AmpInput(_Doc):
     pot: str | None = Field(default=None, description="pot id between source and input, or none")
     weight: int = Field(gt=0, description="input weight (the profile's, e.g. 1 or 10)")
     jack: str = Field(description="which input jack of the amplifier, e.g. x1a, x10b")
+    negated: bool = Field(default=False, description="the machine sets this input's coefficient negative (a "
+                                                     "machine with signed coefficients); left out when false")
+
+    @model_serializer(mode="wrap")
+    def _drop_default_sign(self, handler):
+        """A plain input is written as before the field existed (the same bytes for patch-cord machines)."""
+        out = handler(self)
+        if not self.negated:
+            out.pop("negated", None)
+        return out
 
 
 class Mode(_Doc):

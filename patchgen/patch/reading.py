@@ -7,9 +7,10 @@ sources and pots, an amplifier id used twice, a lag without a time constant, fee
 amplifiers wired in a ring) and resolves each amplifier's element values once, with the
 machine's defaults where the netlist leaves them out.
 
-Every amplifier inverts: an input's gain is weight x pot setting (>= 0) and the inversion belongs
-to the role. Integrators and lags hold their output in a capacitor (a state, no feed-through);
-summers, inverters and differentiators pass their present input through.
+Every amplifier inverts: an input's gain is weight x pot setting (>= 0; negative for an input
+marked ``negated`` on a machine with signed coefficients) and the inversion belongs to the role.
+Integrators and lags hold their output in a capacitor (a state, no feed-through); summers,
+inverters and differentiators pass their present input through.
 """
 
 from __future__ import annotations
@@ -167,7 +168,8 @@ def read(net: Netlist, default_rolloff_s: float | None = None) -> Reading:
                 raise InputError(src, f"{where}.source", f"unknown source {inp.source!r}")
             if inp.pot is not None and inp.pot not in pots:
                 raise InputError(src, f"{where}.pot", f"unknown pot {inp.pot!r}")
-            feeds.append(Feed(inp.source, inp.weight * (pots[inp.pot].setting if inp.pot is not None else 1.0)))
+            sign = -1.0 if inp.negated else 1.0  # a signed coefficient (patchgen.patch.netlist.AmpInput)
+            feeds.append(Feed(inp.source, sign * inp.weight * (pots[inp.pot].setting if inp.pot is not None else 1.0)))
         stages[a.id] = _stage(a, tuple(feeds), net.time_scale_s, default_rolloff_s, src, i)
     if net.output.source not in known:
         raise InputError(src, "output.source", f"unknown source {net.output.source!r}")

@@ -168,6 +168,12 @@ class MachineProfile(InputModel):
     amplifiers: list[AmplifierSlot] = Field(min_length=1, max_length=1000)
     components: Components
     imperfections: Imperfections
+    signed_coefficients: bool = Field(
+        default=False, description="each input's coefficient is set with its sign (a programmed coefficient "
+                                   "matrix, the LUCIDAC): no inverters, every block's output at +1 polarity")
+    programmed: bool = Field(
+        default=False, description="set from a configuration the machine loads, not patched with cords: "
+                                   "integrator modes are chosen in it, so none needs a jumper")
 
     @model_validator(mode="after")
     def _one_time_scale(self) -> MachineProfile:
@@ -233,7 +239,7 @@ def _check_profile(profile: MachineProfile, source: str) -> None:
     for i, m in enumerate(profile.integrator_modes):
         if names.index(m.name) != i:
             raise InputError(source, f"integrator_modes[{i}].name", f"{m.name!r} is used twice")
-    if sum(m.jumper is None for m in profile.integrator_modes) > 1:
+    if not profile.programmed and sum(m.jumper is None for m in profile.integrator_modes) > 1:
         raise InputError(source, "integrator_modes", "more than one mode without a jumper: the technician could "
                          "not tell them apart")
     keys = {f"x{w}" for w in profile.input_weights}

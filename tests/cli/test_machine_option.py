@@ -52,7 +52,7 @@ def test_the_spec_names_the_machine_chosen(tmp_path):
 
 
 @pytest.mark.parametrize("value, says", [
-    ("nope", "unknown machine 'nope' (known: gp6, the-analog-thing)"),
+    ("nope", "unknown machine 'nope' (known: gp6, lucidac, the-analog-thing)"),
     ("nope.toml", "no machine profile file 'nope.toml'"),
     ("", "unknown machine ''"),
 ])

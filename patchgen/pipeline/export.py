@@ -1,0 +1,61 @@
+"""patchgen export: the spec's patch as the configuration a programmed machine loads (the LUCIDAC),
+checked by its client library's own sanity check, into a report whose ``summary()`` is ``--json``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from patchgen.design.lqg import design_on
+from patchgen.inputs.errors import InputError
+from patchgen.lucidac.config import configuration
+from patchgen.lucidac.plan import LanePlan, plan
+from patchgen.patch.build import build_patch
+from patchgen.patch.netlist import Netlist
+from patchgen.pipeline.inputs import Inputs
+from patchgen.profiles.machine import the_machine
+
+
+@dataclass(frozen=True)
+class ExportPlan:
+    """How long the run script runs: the scenario's duration (s), or until stopped (None)."""
+
+    run_s: float | None = None
+    scenario: str | None = None
+
+
+@dataclass(frozen=True)
+class ExportReport:
+    """The patch, its placement on the machine, the configuration and the client's warnings."""
+
+    netlist: Netlist
+    lanes: LanePlan
+    config: dict
+    warnings: tuple[str, ...]
+    plan: ExportPlan
+
+    def summary(self) -> dict:
+        """Every figure the command prints, as plain JSON-able data (--json)."""
+        return {"design": self.netlist.design, "machine": self.netlist.machine,
+                "elements": {e.name: e.carries for e in self.lanes.elements},
+                "lanes": len(self.lanes.lanes),
+                "sensor_inputs": dict(self.lanes.sensor_acl), "output": self.lanes.output_acl,
+                "run_s": self.plan.run_s,
+                "sanity_warnings": list(self.warnings)}
+
+
+def check_programmed(inputs: Inputs) -> None:
+    """Refuse, before anything is computed, a machine that is patched rather than programmed."""
+    if not inputs.machine.programmed:
+        raise InputError("--machine", inputs.machine.id, f"export targets programmed machines (lucidac); "
+                         f"{the_machine(inputs.machine.name)} is patched: use patchgen patch")
+
+
+def run_export(inputs: Inputs, export_plan: ExportPlan = ExportPlan()) -> ExportReport:
+    """Design and patch the spec on its (programmed) machine, place the netlist on the machine's
+    elements and lanes, and build the configuration with the client library."""
+    check_programmed(inputs)
+    spec, machine, bench = inputs
+    net = build_patch(design_on(spec, machine, bench), machine)
+    lanes = plan(net, machine)
+    config, warnings = configuration(lanes)
+    return ExportReport(net, lanes, config, tuple(warnings), export_plan)

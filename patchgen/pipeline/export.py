@@ -9,9 +9,9 @@ from patchgen.design.lqg import design_on
 from patchgen.inputs.errors import InputError
 from patchgen.lucidac.config import configuration
 from patchgen.lucidac.plan import LanePlan, plan
-from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
+from patchgen.pipeline.scaling import scaled_patch
 from patchgen.profiles.machine import the_machine
 
 
@@ -55,7 +55,7 @@ def run_export(inputs: Inputs, export_plan: ExportPlan = ExportPlan()) -> Export
     elements and lanes, and build the configuration with the client library."""
     check_programmed(inputs)
     spec, machine, bench = inputs
-    net = build_patch(design_on(spec, machine, bench), machine)
+    net = scaled_patch(design_on(spec, machine, bench), machine, bench).netlist  # the patch every command builds
     lanes = plan(net, machine)
     config, warnings = configuration(lanes)
     return ExportReport(net, lanes, config, tuple(warnings), export_plan)

@@ -123,7 +123,7 @@ def sensor_filters(X, XF, sensors, K, rf, st):
 @nb.njit(**_JIT)
 def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip, sig, raw, K, ra, st, acc):
     """Sensors and amplifiers in evaluation order: sig (clipped if clip; its last row stays 0),
-    raw (before clipping), and the amplifier state derivatives into K[st], from row ra (a summer's stay 0).
+    raw (before clipping; at stage 0 only, the one the summaries read), and the amplifier state derivatives into K[st], from row ra (a summer's stay 0).
     sensors: patchgen.bench.kernel's Sensors (a sensor reads its plant state, quantised, or its
     filter's output in XF); wiring: patchgen.bench.kernel's Wiring; X, Z, XF, nz, drift and
     sensor_gain (sensor, lane) are per lane."""
@@ -151,26 +151,40 @@ def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip,
     for j in range(amp_kind.shape[0]):
         kd, a = amp_kind[j], ns + j
         if kd == INTEGRATOR or kd == LAG:
-            for l in range(nl):
-                v = Z[j, l] + nz[a, l]
-                raw[j, l] = v
-                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+            if st == 0:
+                for l in range(nl):
+                    v = Z[j, l] + nz[a, l]
+                    raw[j, l] = v
+                    sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+            else:
+                for l in range(nl):
+                    v = Z[j, l] + nz[a, l]
+                    sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
             continue
         b, k = _partial(j, wiring, sig, acc)
         s0, s1, s2, s3, g0, g1, g2, g3 = _group(wiring, k)
-        if kd == SUMMER:
+        if kd == SUMMER and st == 0:
             for l in range(nl):
                 v = -_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) + nz[a, l]
                 raw[j, l] = v
+                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+        elif kd == SUMMER:
+            for l in range(nl):
+                v = -_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) + nz[a, l]
                 sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
         else:  # DIFFERENTIATOR with roll-off: its state's slope, then its output
             p1, p2 = param1[j], param2[j]
             for l in range(nl):
                 K[st, ra + j, l] = p2 * (_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) - Z[j, l])
-            for l in range(nl):
-                v = -p1 * (_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) - Z[j, l]) + nz[a, l]
-                raw[j, l] = v
-                sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+            if st == 0:
+                for l in range(nl):
+                    v = -p1 * (_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) - Z[j, l]) + nz[a, l]
+                    raw[j, l] = v
+                    sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
+            else:
+                for l in range(nl):
+                    v = -p1 * (_add(acc[b, l], sig, l, s0, s1, s2, s3, g0, g1, g2, g3) - Z[j, l]) + nz[a, l]
+                    sig[a, l] = hi if v > hi else (-hi if v < -hi else v)
     # last, the integrating amplifiers' inputs, now that every signal of this instant is known
     for j in range(amp_kind.shape[0]):
         kd = amp_kind[j]

@@ -123,14 +123,14 @@ def patch_outputs(spec) -> dict[str, str]:
     """What `patchgen patch` writes for a spec, by file name (no bench prediction)."""
     from patchgen.bench.diagnosis import as_patched_on_bench
     from patchgen.design.lqg import design_on
-    from patchgen.patch.build import build_patch
+    from patchgen.pipeline.scaling import scaled_patch
     from patchgen.profiles.bench import load_bench
     from patchgen.profiles.machine import load_machine
     from patchgen.render.patchfiles import patch_files
 
     machine, bench = load_machine(spec.machine), load_bench(spec.bench)
     d = design_on(spec, machine, bench)
-    net = build_patch(d, machine)
+    net = scaled_patch(d, machine, bench).netlist  # scaled for signal-to-noise, as every command builds it
     return patch_files(d, machine, net, judged=as_patched_on_bench(d, net, machine, bench))
 
 

@@ -123,7 +123,8 @@ def sensor_filters(X, XF, sensors, K, rf, st):
 @nb.njit(**_JIT)
 def circuit(X, Z, XF, s_ref, nz, sensors, sensor_gain, wiring, drift, sat, clip, sig, raw, K, ra, st, acc):
     """Sensors and amplifiers in evaluation order: sig (clipped if clip; its last row stays 0),
-    raw (before clipping; at stage 0 only, the one the summaries read), and the amplifier state derivatives into K[st], from row ra (a summer's stay 0).
+    raw (before clipping; at stage 0 only, the one the summaries read), and the amplifier state
+    derivatives into K[st], from row ra (a summer's stay 0).
     sensors: patchgen.bench.kernel's Sensors (a sensor reads its plant state, quantised, or its
     filter's output in XF); wiring: patchgen.bench.kernel's Wiring; X, Z, XF, nz, drift and
     sensor_gain (sensor, lane) are per lane."""

@@ -86,6 +86,12 @@ def dial_floor(machine: MachineProfile) -> float:
     return machine.pot_resolution / DIAL_SHARE
 
 
+def dial_limits(setting: float, resolution: float) -> bool:
+    """Whether a pot's dial step is more than DIAL_SHARE of its setting: the dial, not the design,
+    then sets its coefficient to that precision (a setting of 0 is a term left out)."""
+    return 0.0 < setting and resolution > DIAL_SHARE * setting
+
+
 def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: MachineProfile) -> Scaling:
     """The factor each block's voltage is multiplied by (1: kept), see the module docstring.
 

@@ -70,7 +70,7 @@ def levels_section(pred: BenchPrediction, net: Netlist) -> SheetSection:
     note = (f"The largest |output| of each amplifier over every run above, as a share of the reference "
             f"(+/-{net.reference_V:g} V), and over the machine's noise floor (its amplifier noise and "
             f"integrator offset together). A signal that uses little of its range carries the machine's "
-            f"noise, offsets and the dial's step at that much more weight; 'low' marks one under "
+            f"noise, offsets and the settings' step at that much more weight; 'low' marks one under "
             f"{100 * LOW_SHARE:g} %.")
     return SheetSection("Signal levels on the bench", ["amplifier", "carries", "expected peak", "SNR (dB)", ""],
                         rows, note)

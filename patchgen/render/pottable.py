@@ -10,10 +10,12 @@ from rich.console import Console
 from rich.table import Table
 
 from patchgen.patch.netlist import Netlist
+from patchgen.patch.snr_scaling import dial_limits
 from patchgen.profiles.machine import MachineProfile, the_machine
 from patchgen.render.terminal import add_row, number, show, table, text
 
-COLUMNS = ("pot", "setting", "signal", "amplifier", "input", "weight", "coefficient", "realized", "error_pct", "note")
+COLUMNS = ("pot", "setting", "signal", "amplifier", "input", "weight", "coefficient", "realized", "error_pct",
+           "step_limits", "note")
 
 
 def print_patch(net: Netlist, machine: MachineProfile, written: list, console: Console | None = None) -> None:
@@ -34,7 +36,8 @@ def pot_rows(net: Netlist) -> list[dict]:
         rows.append({"pot": p.id, "setting": f"{p.setting:.3f}", "signal": p.signal, "amplifier": p.amplifier,
                      "input": p.jack, "weight": p.weight, "coefficient": f"{p.coefficient:.6g}",
                      "realized": f"{p.realized:.6g}",
-                     "error_pct": "inf" if err == float("inf") else f"{100 * err:+.3f}", "note": p.note})
+                     "error_pct": "inf" if err == float("inf") else f"{100 * err:+.3f}",
+                     "step_limits": "yes" if dial_limits(p.setting, net.pot_resolution) else "", "note": p.note})
     return rows
 
 
@@ -49,12 +52,14 @@ def pots_csv(net: Netlist) -> str:
 
 def pot_table(net: Netlist, pot_setting: str) -> Table:
     """The pot table for the terminal, a row a line at 80 columns; ``pot_setting`` says how the
-    machine's pots are set (its profile's procedure.pot_setting)."""
+    machine's pots are set (its profile's procedure.pot_setting); a setting whose dial step limits
+    its coefficient (patchgen.patch.snr_scaling.dial_limits) is marked *."""
     t = table(f"Pot settings for {net.design} on {the_machine(net.machine_name)} ({pot_setting})",
               text("pot"), number("setting"), text("signal"), text("into"), number("coefficient"),
               number("realised"), number("error"))
-    for r in pot_rows(net):
-        add_row(t, r["pot"], r["setting"], r["signal"], _into(r["amplifier"], r["input"], r["weight"]),
+    for r in pot_rows(net):  # a setting the dial limits (its step over DIAL_SHARE of it) marked *
+        add_row(t, r["pot"], r["setting"] + (" *" if r["step_limits"] else ""), r["signal"],
+                _into(r["amplifier"], r["input"], r["weight"]),
                 r["coefficient"], r["realized"], "n/a" if r["error_pct"] == "inf" else _error(float(r["error_pct"])))
     return t
 

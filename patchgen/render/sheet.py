@@ -20,6 +20,7 @@ from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
 from patchgen.patch.parts import fmt_value
 from patchgen.patch.realization import STATE_UNITS
 from patchgen.patch.sign_check import SignStep
+from patchgen.patch.snr_scaling import dial_limits
 from patchgen.profiles.machine import Procedure
 from patchgen.render.diagram_pages import PRINTED_MIN_PT, printed_scale, svg_size_mm
 from patchgen.render.diagram_symbols import SMALLEST_PT, dial_decimals, quantity_label, signed_label
@@ -107,7 +108,7 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "realized": _signed(p.realized, 4),
         "design": _signed(p.coefficient, 4),
         "error": _error(p),
-        "note": p.note,
+        "note": "; ".join(n for n in (p.note, _dial_note(p.setting, net.pot_resolution)) if n),
     } for p in net.pots]
 
     amplifiers = [{
@@ -255,6 +256,15 @@ def _error(p: Pot) -> str:
     if abs(e) < 1.0:
         return _minus(f"{100 * e:+.2f} %")
     return _minus(f"{100 * e:+.3g} %")
+
+
+def _dial_note(setting: float, resolution: float) -> str:
+    """A pot whose setting's step limits the law it sets, said so in words any machine's sheet may use
+    (patchgen.patch.snr_scaling.dial_limits)."""
+    if not dial_limits(setting, resolution):
+        return ""
+    return (f"the setting's resolution limits this coefficient: its step {resolution:g} is "
+            f"{100 * resolution / setting:.1f} % of the setting")
 
 
 def _signed(x: float, digits: int) -> str:

@@ -60,7 +60,7 @@ def test_each_row_is_its_pot(net):
 def test_a_coefficient_of_zero_has_no_error_percentage(net):
     odd = _with_zero_coefficient(net)
     assert pot_rows(odd)[0]["error_pct"] == "inf"
-    assert "\nP1,0.500,-u_c,A1,x10a,10,0,5,inf,\n" in pots_csv(odd)
+    assert "\nP1,0.500,-u_c,A1,x10a,10,0,5,inf,,\n" in pots_csv(odd)
     console = Console(file=io.StringIO(), width=200, record=True)
     console.print(pot_table(odd, GP6.procedure.pot_setting))
     p1 = next(line for line in console.export_text().splitlines() if "P1" in line)

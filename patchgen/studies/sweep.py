@@ -4,6 +4,7 @@ outcome function is given, the predicted outcome of the nominal patch on each pe
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
@@ -72,13 +73,13 @@ def _outcome(net, plant, machine, bench, sc: Scenario, runs) -> dict:
 
 
 def _row(args) -> SweepRow:
-    spec, machine, bench, label, factors, nominal_pots, nominal_net, scenario, runs = args
+    spec, machine, bench, label, factors, nominal_pots, nominal_net, scenario, runs, scales = args
     plant = plant_params(spec).scaled(**factors)
     d = design_on(spec, machine, bench, plant=plant)
     changes: dict[str, tuple[float, float]] = {}
     err = None
     try:
-        net = build_patch(d, machine, suggest=False)
+        net = build_patch(d, machine, suggest=False, scales=scales)
         for p in net.pots:
             if p.id in nominal_pots and nominal_pots[p.id] != p.setting:
                 changes[p.id] = (nominal_pots[p.id], p.setting)
@@ -92,7 +93,8 @@ def _row(args) -> SweepRow:
 
 
 def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float, workers: int = 0,
-          scenario: Scenario | None = None, runs: int = 1, *, bench: BenchProfile | None = None) -> list[SweepRow]:
+          scenario: Scenario | None = None, runs: int = 1, *, bench: BenchProfile | None = None,
+          scales: Mapping[str, float] | None = None) -> list[SweepRow]:
     """Design for each perturbed plant (see :func:`cases`), rows spread over the computer's cores.
 
     Parameters
@@ -115,6 +117,8 @@ def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float
     bench : BenchProfile, optional
         The bench the spec names, loaded by the caller: needed for the prediction and for an
         estimator shaped for the bench's noise.
+    scales : mapping of str to float, optional
+        Each block's voltage scale (patchgen.patch.snr_scaling), the same for every patch.
 
     Returns
     -------
@@ -125,11 +129,12 @@ def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float
         raise ValueError("a sweep's predicted outcome simulates the bench: pass the bench profile")
     nominal = design_on(spec, machine, bench)
     try:
-        net = build_patch(nominal, machine, suggest=False)
+        net = build_patch(nominal, machine, suggest=False, scales=scales)
         nominal_pots = {p.id: p.setting for p in net.pots}
     except InputError:
         net, nominal_pots = None, {}
-    jobs = [(spec, machine, bench, label, f, nominal_pots, net, scenario, runs) for label, f in cases(names, by)]
+    jobs = [(spec, machine, bench, label, f, nominal_pots, net, scenario, runs, scales)
+            for label, f in cases(names, by)]
     if workers == 1 or len(jobs) < PARALLEL_FROM:
         return [_row(j) for j in jobs]
     with ProcessPoolExecutor(max_workers=workers or None) as ex:

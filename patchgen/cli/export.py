@@ -7,6 +7,7 @@ import click
 from patchgen.inputs.resources import shipped
 from patchgen.pipeline.export import ExportPlan, check_programmed, run_export
 from patchgen.pipeline.inputs import load_inputs, scenario_for
+from patchgen.render.bench_sheet import failure_banner
 from patchgen.render.lucidac_files import EXPORT_FILES, export_files
 from patchgen.render.outputs import check_out_dir, json_text, write_files
 
@@ -48,4 +49,8 @@ def export_cmd(spec, machine, out_dir, scenario_path, as_json, force) -> None:
     click.echo(f"  ACL_OUT {lp.output_acl}: u_c")
     for w in report.warnings:
         click.echo(f"lucipy: {w}")
+    pred, bench = report.prediction, inputs.bench.id
+    banner = failure_banner(bench, pred) if pred is not None else ""
+    click.echo(banner.replace("See 'Predicted on the bench'.", "(patchgen patch gives the figures)") if banner
+               else f"predicted on the {bench} bench: held in every scenario, the wired loop stable")
     click.echo("wrote " + ", ".join(str(p) for p in written))

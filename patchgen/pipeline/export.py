@@ -11,6 +11,7 @@ from patchgen.lucidac.config import configuration
 from patchgen.lucidac.plan import LanePlan, plan
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
+from patchgen.pipeline.prediction import BenchPrediction, predict_on_bench
 from patchgen.pipeline.scaling import scaled_patch
 from patchgen.profiles.machine import the_machine
 
@@ -25,13 +26,15 @@ class ExportPlan:
 
 @dataclass(frozen=True)
 class ExportReport:
-    """The patch, its placement on the machine, the configuration and the client's warnings."""
+    """The patch, its placement on the machine, the configuration, the client's warnings, and the
+    patch predicted on the bench (as patchgen patch's sheet predicts it)."""
 
     netlist: Netlist
     lanes: LanePlan
     config: dict
     warnings: tuple[str, ...]
     plan: ExportPlan
+    prediction: BenchPrediction | None = None
 
     def summary(self) -> dict:
         """Every figure the command prints, as plain JSON-able data (--json)."""
@@ -40,7 +43,8 @@ class ExportReport:
                 "lanes": len(self.lanes.lanes),
                 "sensor_inputs": dict(self.lanes.sensor_acl), "output": self.lanes.output_acl,
                 "run_s": self.plan.run_s,
-                "sanity_warnings": list(self.warnings)}
+                "sanity_warnings": list(self.warnings),
+                "prediction": None if self.prediction is None else self.prediction.summary()}
 
 
 def check_programmed(inputs: Inputs) -> None:
@@ -52,10 +56,14 @@ def check_programmed(inputs: Inputs) -> None:
 
 def run_export(inputs: Inputs, export_plan: ExportPlan = ExportPlan()) -> ExportReport:
     """Design and patch the spec on its (programmed) machine, place the netlist on the machine's
-    elements and lanes, and build the configuration with the client library."""
+    elements and lanes, build the configuration with the client library, and predict the patch on
+    the bench (patchgen.pipeline.prediction)."""
     check_programmed(inputs)
     spec, machine, bench = inputs
-    net = scaled_patch(design_on(spec, machine, bench), machine, bench).netlist  # the patch every command builds
+    d = design_on(spec, machine, bench)
+    scaled = scaled_patch(d, machine, bench)  # the patch every command builds
+    net = scaled.netlist
     lanes = plan(net, machine)
     config, warnings = configuration(lanes)
-    return ExportReport(net, lanes, config, tuple(warnings), export_plan)
+    pred = predict_on_bench(d, net, machine, bench, done=scaled.runs)  # a patch that falls is not handed out unsaid
+    return ExportReport(net, lanes, config, tuple(warnings), export_plan, pred)

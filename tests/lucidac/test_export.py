@@ -140,3 +140,20 @@ def test_emulator_accepts_and_runs_the_configuration(exported):
     finally:
         proc.terminate()
         proc.join()
+
+
+def test_the_export_says_how_the_patch_does_on_the_bench(exported, tmp_path):
+    """The patch is predicted on the bench as patch's sheet predicts it, and a patch that falls is
+    not handed out unsaid: bench-recommended on the LUCIDAC does not hold every scenario on uw-1991
+    (measured: step-cart 0 %), and the command says so in one line."""
+    from tests.cli_run import run_patchgen
+
+    report, _ = exported
+    pred = report.prediction
+    assert pred is not None and [p.scenario for p in pred.predictions] == ["offset-10deg", "finger-push",
+                                                                          "step-cart", "hold-120s"]
+    assert report.summary()["prediction"] == pred.summary()
+    assert not pred.holds and any(p.fraction_held < 0.95 for p in pred.predictions)
+    r = run_patchgen("export", "bench-recommended", "--machine", "lucidac", "-o", tmp_path / "out")
+    assert r.returncode == 0
+    assert "Predicted to fail on the uw-1991 bench: held in " in r.stdout

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 from patchgen.design.lqg import design_on
 from patchgen.inputs.errors import InputError
-from patchgen.lucidac.config import configuration
+from patchgen.lucidac.config import configuration, lucipy_module
 from patchgen.lucidac.plan import LanePlan, plan
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
@@ -48,10 +48,12 @@ class ExportReport:
 
 
 def check_programmed(inputs: Inputs) -> None:
-    """Refuse, before anything is computed, a machine that is patched rather than programmed."""
+    """Refuse, before anything is computed, a machine that is patched rather than programmed, or
+    a machine's export without its client library."""
     if not inputs.machine.programmed:
         raise InputError("--machine", inputs.machine.id, f"export targets programmed machines (lucidac); "
                          f"{the_machine(inputs.machine.name)} is patched: use patchgen patch")
+    lucipy_module()  # the client library builds the configuration: without it, say so before computing
 
 
 def run_export(inputs: Inputs, export_plan: ExportPlan = ExportPlan()) -> ExportReport:

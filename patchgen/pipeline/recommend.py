@@ -36,6 +36,7 @@ class RecommendReport:
     recommendation: Recommendation
     judged: AsPatched | None
     prediction: BenchPrediction | None
+    rescaled: bool = False  # the chosen patch's signals scaled for signal-to-noise after the ranking
 
     @property
     def best(self) -> Candidate | None:
@@ -82,7 +83,8 @@ def run_recommend(inputs: Inputs, scenarios: Sequence[Scenario], plan: Recommend
     done = reusable_runs(rec, best)
     scaled = scaled_patch(best.design, machine, bench, best.netlist, runs_of=lambda net: standard_runs(
         net, best.design.plant, bench, machine, ENVELOPE_RUNS, done=done, bench_spread=bool(bench.uncertainty.ranges)))
-    if scaled.netlist is not best.netlist:  # the chosen patch as patchgen patch gives it (ranked at its sensor
+    rescaled = scaled.netlist is not best.netlist
+    if rescaled:  # the chosen patch as patchgen patch gives it (ranked at its sensor
         best = replace(best, netlist=scaled.netlist)  # constants), so the sheet's prediction is of it, run again
         rec = replace(rec, ranked=(best, *rec.ranked[1:]))
         done, corners = {}, None
@@ -90,4 +92,4 @@ def run_recommend(inputs: Inputs, scenarios: Sequence[Scenario], plan: Recommend
         corners = best.bench_study
     judged = as_patched_on_bench(best.design, best.netlist, machine, bench)
     pred = predict_on_bench(best.design, best.netlist, machine, bench, done=done, corners=corners)
-    return RecommendReport(rec, judged, pred)
+    return RecommendReport(rec, judged, pred, rescaled)

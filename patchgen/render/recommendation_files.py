@@ -4,6 +4,7 @@ section, the sheet's 'Why this patch' table, and the files the recommend command
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from patchgen.inputs.spec_file import spec_toml
 from patchgen.pipeline.recommend import RecommendReport
@@ -295,6 +296,11 @@ def why_section(rec: Recommendation, reference_V: float) -> SheetSection:
     return SheetSection("Why this patch", header, rows, note)
 
 
+RESCALED = ("The chosen patch was ranked at its sensor constants; its signals were then scaled for signal-to-noise "
+            "(its netlist's notes say which, by how much and why they stopped), and its bench prediction is of "
+            "that patch, simulated again.")
+
+
 def recommendation_files(report: RecommendReport, machine: MachineProfile, bench: BenchProfile) -> dict[str, str]:
     """The files recommend writes: recommendation.md and recommendation.json always; with a
     chosen candidate, its patch files (the bench prediction and 'Why this patch' on its sheet)
@@ -315,7 +321,10 @@ def recommendation_files(report: RecommendReport, machine: MachineProfile, bench
     rec, best = report.recommendation, report.best
     files: dict[str, str] = {}
     if best is not None:
-        sections = [s for s in (departures_section(rec), why_section(rec, machine.reference_V)) if s is not None]
+        why = why_section(rec, machine.reference_V)
+        if report.rescaled:
+            why = replace(why, note=f"{why.note} {RESCALED}")
+        sections = [s for s in (departures_section(rec), why) if s is not None]
         files.update(predicted_patch_files(best.design, machine, bench, best.netlist, report.prediction,
                                            report.judged, sections))
         departs = "".join(f"\n  {line}" for line in grouped(best.departures))
@@ -324,9 +333,9 @@ def recommendation_files(report: RecommendReport, machine: MachineProfile, bench
             "Every patchgen command takes this file; see recommendation.md for why."
             + (f"\nIt departs from {rec.spec.name} in:{departs}" if departs else "")))
     files["recommendation.md"] = (f"# Why this patch\n\n{table_markdown(rec, machine.reference_V)}"
-                                  + departures_markdown(rec))
+                                  + (f"\n{RESCALED}\n" if report.rescaled else "") + departures_markdown(rec))
     files["recommendation.json"] = json_text({
-        "spec": rec.spec.name, "bench": bench.id, "machine": machine.id,
+        "spec": rec.spec.name, "bench": bench.id, "machine": machine.id, "rescaled_after_ranking": report.rescaled,
         "scenarios": [{"name": sc.name, "seed": rec.seed_of(sc)} for sc in rec.scenarios],
         "max_runs": rec.max_runs, "target": TARGET, "chosen": None if best is None else best.label,
         "bench_ranges": {k: list(v) for k, v in rec.ranges.items()}, "bench_distribution": rec.distribution,

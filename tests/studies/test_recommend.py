@@ -73,6 +73,12 @@ def test_recommended_spec_patches_to_the_chosen_patch(recommended, tmp_path):
     assert_patches_back(out, tmp_path)
     spec = load_spec(out / "recommended.toml")
     assert spec.name == "bench-recommended-recommended"
+    # ranked at its sensor constants, then scaled for signal-to-noise as patch scales it, and said so
+    from patchgen.render.recommendation_files import RESCALED
+
+    notes = read_netlist(out / "netlist.json").notes
+    assert rec["rescaled_after_ranking"] is True and any("for signal-to-noise" in n for n in notes)
+    assert RESCALED in (out / "recommendation.md").read_text()
     d = design_on(spec, load_machine("gp6"), BENCH)
     check_roundtrip(d, read_netlist(out / "netlist.json"), load_machine("gp6").pot_resolution)
 

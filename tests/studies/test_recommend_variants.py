@@ -55,6 +55,7 @@ def test_thesis_ch5_recommends_the_nearest_variant_that_holds(ch5):
     assert {s["scenario"] for s in best["scenarios"]} == set(STANDARD)
     for sc in best["scenarios"]:  # measured: every run of every scenario held, 80 each
         assert sc["held"] == sc["runs"] == 80 and sc["interval_95"][0] >= 0.95 and sc["overloaded"] == 0
+    assert rec["rescaled_after_ranking"] is False  # thesis-ch5 keeps the thesis's scaling, and so its variants
     assert [(d["field"], d["from"], d["to"]) for d in rec["departures"]] == DEPARTURES
     assert best["departures"] == rec["departures"]
     assert "departs from thesis-ch5:" in printed and "integrators.int_theta true -> false" in printed

@@ -9,7 +9,6 @@ from __future__ import annotations
 from patchgen.inputs.errors import InputError
 from patchgen.lucidac.plan import LanePlan
 
-SLOW_K0 = 100.0  # lucipy circuits.MIntBlock.slow; the other mode is MIntBlock.fast (10 000 1/s)
 EXTRA = "lucidac"  # the optional dependency that installs lucipy (pyproject.toml)
 
 
@@ -34,7 +33,7 @@ def circuit(plan: LanePlan):
     el = {}
     for e in plan.elements:
         if e.kind == "int":
-            el[e.name] = c.int(id=e.index, ic=0.0, slow=e.k0_per_s == SLOW_K0)
+            el[e.name] = c.int(id=e.index, ic=0.0, slow=e.k0_per_s == plan.slow_k0_per_s)
         else:
             el[e.name] = c.alloc(Id, e.index)
     for lane in plan.lanes:

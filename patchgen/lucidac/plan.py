@@ -36,12 +36,9 @@ from patchgen.patch.netlist import Netlist
 from patchgen.patch.reading import read
 from patchgen.profiles.machine import MachineProfile
 
-LANES = 32          # lanes of the U-C-I matrix (lucipy circuits.Routing.max_lanes)
 ACL_FIRST = 24      # lanes 24-31 reach the front panel (circuits.DefaultLUCIDAC.acl_offset)
 ACL_COUNT = 8       # front-panel inputs and outputs, each (circuits.DefaultLUCIDAC.num_acls)
-LANE_MAX = 10.0     # the largest coefficient of one lane: [-1, 1] x 10 upscaling (circuits.Route.sanity_list)
 STAGE_ABOVE = 2     # a coefficient over more lanes than this goes through a gain stage, when one is free
-BUFFER_K0 = 10000.0  # a sensor's buffer integrator runs fast (lucipy circuits.MIntBlock.fast): a 0.1 ms lag
 
 
 @dataclass(frozen=True)
@@ -83,6 +80,7 @@ class LanePlan:
     output_acl: int
     reference_V: float
     notes: tuple[str, ...]
+    slow_k0_per_s: float  # the integrators' slow mode (the profile's slowest): lucipy's slow flag
 
     def element(self, name: str) -> Element:
         return next(e for e in self.elements if e.name == name)
@@ -91,6 +89,11 @@ class LanePlan:
 def plan(net: Netlist, machine: MachineProfile) -> LanePlan:
     """Place the netlist on the LUCIDAC; a shortfall of elements or lanes is one ResourceError line."""
     src = f"netlist {net.design}"
+    # from the profile: a lane per coefficient pot, a lane's largest coefficient its top weighted
+    # input, and a sensor's buffer on the fastest integrator mode (the shortest lag)
+    n_lanes, lane_max = machine.pot_count, max(machine.input_weights) * machine.pot_max
+    modes = [m.k0_per_s for m in machine.modes()]  # slowest first
+    buffer_k0 = modes[-1]
     reading = read(net)
     elements: dict[str, Element] = {}
     for a in net.amplifiers:
@@ -116,10 +119,10 @@ def plan(net: Netlist, machine: MachineProfile) -> LanePlan:
             continue
         buf = _take(free, "int", src, f"sensor {s} needs an element of its own (front-panel inputs carry no "
                     "coefficient)")
-        elements[buf] = Element(buf, "int", _index(buf), s, f"-{s} (front-panel input {acl})", BUFFER_K0, -1.0)
+        elements[buf] = Element(buf, "int", _index(buf), s, f"-{s} (front-panel input {acl})", buffer_k0, -1.0)
         lanes += [Lane(f"ACL_IN {acl}", buf, 1.0, 1.0, s), Lane(buf, buf, 1.0, 1.0, s)]
-        notes.append(f"{s} enters on front-panel input {acl} into integrator {buf} (k0 {BUFFER_K0:g} 1/s, its own "
-                     f"output fed back at 1): it carries -{s} with a lag of {1e3 / BUFFER_K0:g} ms, which the "
+        notes.append(f"{s} enters on front-panel input {acl} into integrator {buf} (k0 {buffer_k0:g} 1/s, its own "
+                     f"output fed back at 1): it carries -{s} with a lag of {1e3 / buffer_k0:g} ms, which the "
                      "netlist does not have")
     output_acl = len(sensor_acl)
     lanes.append(Lane(net.output.source, f"ACL_OUT {output_acl}", 1.0, 1.0, "u_c"))
@@ -129,22 +132,23 @@ def plan(net: Netlist, machine: MachineProfile) -> LanePlan:
                 continue
             feeder = next(e for e in elements.values() if e.amp == source)
             c = _lucidac(elements[aid], g) * feeder.scale
-            if abs(c) > STAGE_ABOVE * LANE_MAX and free["id"]:  # a gain stage spares lanes
+            if abs(c) > STAGE_ABOVE * lane_max and free["id"]:  # a gain stage spares lanes
                 stage = _take(free, "id", src, "")
-                k = abs(c) / LANE_MAX
+                k = abs(c) / lane_max
                 elements[stage] = Element(stage, "id", _index(stage), f"{source} x{k:.4g}",
                                           f"{k:.4g} x {feeder.carries}", None, feeder.scale / k)
-                lanes += _split(feeder.name, stage, k, g / LANE_MAX, source)
-                lanes += _split(stage, aid, math.copysign(LANE_MAX, c), math.copysign(LANE_MAX, g), source)
+                lanes += _split(feeder.name, stage, k, g / lane_max, source, lane_max)
+                lanes += _split(stage, aid, math.copysign(lane_max, c), math.copysign(lane_max, g), source, lane_max)
                 notes.append(f"{source} into {aid}: coefficient {c:.4g} as a gain stage, identity element {stage} "
-                             f"({k:.4g}) then {LANE_MAX:g}")
+                             f"({k:.4g}) then {lane_max:g}")
                 continue
-            lanes += _split(feeder.name, aid, c, g, source)
-    if len(lanes) > LANES:
-        raise ResourceError(src, "machine", f"the patch needs {len(lanes)} lanes; {machine.name} has {LANES}")
+            lanes += _split(feeder.name, aid, c, g, source, lane_max)
+    if len(lanes) > n_lanes:
+        raise ResourceError(src, "machine", f"the patch needs {len(lanes)} lanes; {machine.name} has {n_lanes}")
     order = sorted(elements.values(), key=lambda e: (e.kind != "int", e.index))
     return LanePlan(net.design, tuple(order), tuple(lanes), sensor_acl,
-                    {s.id: s.volts_per_unit for s in net.sensors}, output_acl, net.reference_V, tuple(notes))
+                    {s.id: s.volts_per_unit for s in net.sensors}, output_acl, net.reference_V, tuple(notes),
+                    modes[0])
 
 
 def _take(free: dict[str, list[str]], kind: str, src: str, why: str) -> str:
@@ -154,9 +158,9 @@ def _take(free: dict[str, list[str]], kind: str, src: str, why: str) -> str:
     return free[kind].pop(0)
 
 
-def _split(source: str, target: str, c: float, gain: float, signal: str) -> list[Lane]:
-    """A coefficient over ceil(|c| / LANE_MAX) lanes of equal share."""
-    n = max(1, math.ceil(abs(c) / LANE_MAX - 1e-12))
+def _split(source: str, target: str, c: float, gain: float, signal: str, lane_max: float) -> list[Lane]:
+    """A coefficient over ceil(|c| / lane_max) lanes of equal share."""
+    n = max(1, math.ceil(abs(c) / lane_max - 1e-12))
     return [Lane(source, target, c / n, gain / n, signal)] * n
 
 

@@ -1,7 +1,9 @@
 """The netlist: what is patched on the machine, as a versioned JSON document.
 
-Schema id ``patchgen.netlist/3`` (2 added ``parts``, the external parts a patch needs; 3 each
-integrator's ``mode``, its rate k0 and how it is selected). Ideal meaning of each amplifier role
+Schema id ``patchgen.netlist/4`` (2 added ``parts``, the external parts a patch needs; 3 each
+integrator's ``mode``, its rate k0 and how it is selected; 4 an input's ``negated``, a coefficient
+set negative on a machine whose coefficients carry their sign: a version-3 reader would take its
+sign wrong). Ideal meaning of each amplifier role
 (all amplifiers invert; ``k_j`` is the pot setting feeding input j, or 1 with no pot; ``w_j`` the
 input weight 1 or 10; ``T`` the integrator's time scale 1/k0 of its mode, or the netlist's
 ``time_scale_s`` for an integrator that names no mode):
@@ -29,7 +31,7 @@ from typing import Literal, NamedTuple
 
 from pydantic import BaseModel, ConfigDict, Field, model_serializer
 
-SCHEMA_ID = "patchgen.netlist/3"
+SCHEMA_ID = "patchgen.netlist/4"
 
 AmpRole = Literal["integrator", "summer", "inverter", "differentiator", "lag"]
 

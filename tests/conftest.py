@@ -71,11 +71,11 @@ def design_path(name: str) -> Path:
     return DESIGNS / f"{name}.toml"
 
 
-def design_from_path(path):
-    """A spec file's design on the machine and bench it names, as patchgen design makes it, and
-    that machine."""
+def design_from_path(path, machine=None):
+    """A spec file's design on the machine and bench it names (or on ``machine``, a shipped id), as
+    patchgen design makes it, and that machine."""
     from patchgen.pipeline.design import run_design
     from patchgen.pipeline.inputs import load_inputs
 
-    inputs = load_inputs(str(path))
+    inputs = load_inputs(str(path)) if machine is None else load_inputs(str(path), machine=machine)
     return run_design(inputs).design, inputs.machine

@@ -79,7 +79,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     """
     spread = dict(spread or {})
     ranges = bs.active_ranges(bench, ideal, scenario.noise.mode == "profile") if bench_spread else {}
-    fastest = [1.0 / v for v in circuit.time_rates() if v > 0]
+    fastest = [1.0 / v for v in circuit.time_rates() + circuit.internal_rates() if v > 0]
     motor = motor_of(bench.actuator)
     if not ideal and bench.actuator.model in LAG_MODELS:
         fastest.append(min(bench.actuator.tau, ranges.get("tau", (math.inf,))[0]))

@@ -220,7 +220,7 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
             nstd[c, l] = draws.noise_std[r, c]
         for j in range(na):
             drift[j, l] = wiring.drift[j] * signs[r, j]
-            za[j, l] = wiring.ic[j]
+            za[j, l] = 0.0 if math.isnan(wiring.ic[j]) else wiring.ic[j]
             over[0, j, l], over[1, j, l] = out.overload_first[r, j], out.overload_time[r, j]
             over[2, j, l] = out.amp_peak[r, j]
         for i in range(N_STATES):
@@ -254,6 +254,21 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
             if wiring.kind[j] == DIFFERENTIATOR:
                 for l in range(nl):
                     za[j, l] -= raw[j, l] / wiring.param1[j]
+    slope0 = np.zeros(nl)
+    # an integrator with no IC (NaN) starts settled too: a lag closed through a difference, its slope
+    # linear in its own state, so two slopes place it where the slope is zero
+    for j in range(na):
+        if math.isnan(wiring.ic[j]):
+            circuit(xp, za, xf, 0.0, quiet, sensors, gain, wiring, drift, sat, np.bool_(False), sig, raw, K, ra,
+                    np.int64(0), acc)
+            for l in range(nl):
+                slope0[l] = K[0, ra + j, l]
+                za[j, l] += 1.0
+            circuit(xp, za, xf, 0.0, quiet, sensors, gain, wiring, drift, sat, np.bool_(False), sig, raw, K, ra,
+                    np.int64(0), acc)
+            for l in range(nl):
+                dk = K[0, ra + j, l] - slope0[l]
+                za[j, l] += -1.0 - slope0[l] / dk if dk != 0.0 else -1.0
     tripped = np.zeros(nl, dtype=np.bool_)
     fallen = np.zeros(nl, dtype=np.bool_)
     alive = np.arange(nl) < nr  # the padding lanes are never running

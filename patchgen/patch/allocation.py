@@ -316,7 +316,8 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                               carries=Signal(quantity=quantity if not st.key.startswith("pre:") else
                                              f"partial {quantity}",
                                              polarity=st.out_polarity, volts_per_unit=vpu, unit=unit),
-                              ic_V=0.0 if st.role in ("integrator", "lag") else None,
+                              ic_V=None if b is not None and b.settles else
+                              0.0 if st.role in ("integrator", "lag") else None,
                               mode=_mode(b, machine) if st.role == "integrator" else None,
                               T_d_s=b.T_d_s if b is not None else None,
                               rolloff_s=b.rolloff_s if b is not None else None,

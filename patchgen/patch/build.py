@@ -75,10 +75,9 @@ def _build(design: Design, machine: MachineProfile, units: int | str | None,
     tries = list(range(1, cap + 1)) if units == "auto" else [units]
     if spec.patch.realization == "compensator" and design.controller is not None:
         return _place_compensator(design, machine, tries)  # plain state feedback has no other form
-    real = realize(design, machine)
+    real = differences.without_differentiators(realize(design, machine), machine)
     if scales:
         real = rescaled(real, scales)
-    real = differences.without_differentiators(real, machine)
     _check_law_reaches_pots(real, machine, spec)
     for n in tries:
         try:

@@ -49,7 +49,7 @@ def without_differentiators(real: Realization, machine: MachineProfile) -> Reali
         src = r.terms[0].signal
         vpu = real.sensors[src] if src in real.sensors else real.block(src).volts_per_unit
         z = Block(lag, "integrate", (Term(r.name, T / roll),), vpu, SENSOR_UNITS.get(src, r.unit),
-                  f"lag of {src} ({roll:g} s) for {r.name}: z' = ({src} - z) / rolloff")
+                  f"lag of {src} ({roll:g} s) for {r.name}: z' = ({src} - z) / rolloff", settles=True)
         d = Block(r.name, "sum", r.terms + (Term(lag, -1.0),), r.volts_per_unit / gain, r.unit,
                   f"{r.purpose}; no differentiator element: {src} minus its lag, the rate / {gain:.4g}")
         notes.append(f"{r.name}: {src} minus its lag of {roll:g} s (an integrator) carries the rate at 1/{gain:.4g} "

@@ -94,7 +94,9 @@ class Amplifier(_Doc):
     role: AmpRole
     inputs: list[AmpInput]
     carries: Signal
-    ic_V: float | None = Field(default=None, description="initial condition (integrators, lags)")
+    ic_V: float | None = Field(default=None, description="initial condition (integrators, lags); none on an "
+                               "integrator: it starts settled on its input (a lag closed through a difference, "
+                               "running while the pendulum is held, as a differentiator is)")
     mode: Mode | None = Field(default=None, description="an integrator's mode (its k0); none for other roles")
     T_d_s: float | None = Field(default=None, description="differentiator gain time constant")
     rolloff_s: float | None = Field(default=None, description="differentiator roll-off time constant")

@@ -15,6 +15,7 @@ inverters and differentiators pass their present input through.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -42,7 +43,9 @@ class Stage:
     """One amplifier as wired, with its element values resolved.
 
     ``T_s`` is the integrator's time scale, ``tau_s`` the lag's time constant, ``T_d_s`` and
-    ``rolloff_s`` the differentiator's gain time and roll-off; the others are None.
+    ``rolloff_s`` the differentiator's gain time and roll-off; the others are None. ``ic_V`` is NaN
+    for an integrator the netlist gives no IC: it starts settled on its input (a lag closed through
+    a difference, patchgen.patch.differences), as a differentiator does.
     """
 
     id: str
@@ -183,6 +186,7 @@ def _stage(a, feeds: tuple[Feed, ...], time_scale_s: float, default_rolloff_s: f
     machine's default."""
     ic = a.ic_V or 0.0
     if a.role == "integrator":  # its mode's 1/k0, or the netlist's time scale (a schema-2 netlist)
+        ic = math.nan if a.ic_V is None else ic  # no IC: it starts settled on its input
         return Stage(a.id, a.role, feeds, ic, T_s=1.0 / a.mode.k0_per_s if a.mode is not None else time_scale_s)
     if a.role == "lag":
         if not a.tau_s or a.tau_s <= 0:

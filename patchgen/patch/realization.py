@@ -59,6 +59,8 @@ class Block:
     rolloff_s: float | None = None
     tau_s: float | None = None
     mode: str | None = None  # an integrate block's integrator mode (patchgen.patch.time_scales)
+    settles: bool = False  # an integrate block that starts settled on its input, as a differentiator does
+    # (a lag closed through a difference: it runs while the pendulum is held, so it has no IC of its own)
 
 
 @dataclass(frozen=True)

@@ -142,6 +142,7 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
             gain[col[name]] = -1.0
     bounds.append((None, None))
     top_c, floor, weights = max(machine.input_weights) * machine.pot_max, dial_floor(machine), machine.input_weights
+    consumers = _consumers(real)
     for b in real.blocks:
         if b.kind == "differentiate":
             continue  # its input is a sensor; its scale is its T_d (an external part's value), not a coefficient
@@ -155,7 +156,7 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
             coef = {i: v for i, v in coef.items() if v != 0.0}
             if c == 0.0 or not coef:
                 continue
-            if any(math.isclose(c, w, rel_tol=1e-12) for w in weights):
+            if _straight(term, c, weights, machine, consumers):
                 eq_rows.append(row(coef))  # wired straight: stays a weight exactly
                 eq_rhs.append(0.0)
                 continue
@@ -178,6 +179,30 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
     for name, v in zip(free, y):
         out[name] = math.exp(v)
     return Scaling(out, {b: _why(b, real, out, peaks, machine) for b in free if out[b] != 1.0})
+
+
+def _consumers(real: Realization) -> dict[str, int]:
+    """How many blocks take each sensor."""
+    out: dict[str, int] = {}
+    for b in real.blocks:
+        for sig in {t.signal for t in b.terms} & set(real.sensors):
+            out[sig] = out.get(sig, 0) + 1
+    return out
+
+
+def _straight(term: Term, c: float, weights: tuple[float, ...] | list[float], machine: MachineProfile,
+              consumers: Mapping[str, int]) -> bool:
+    """Whether a coefficient of magnitude ``c`` is wired straight, and so must stay exactly what it is.
+
+    On a patched machine, any coefficient that is an input weight (no pot). On a programmed one
+    every coefficient is a setting, except a sensor's unit coefficient into its one consumer: a
+    front-panel input enters that element with no coefficient of its own (patchgen.lucidac.plan).
+    """
+    if not any(math.isclose(c, w, rel_tol=1e-12) for w in weights):
+        return False
+    if not machine.programmed:
+        return True
+    return consumers.get(term.signal, 0) == 1 and math.isclose(c, 1.0, rel_tol=1e-12)
 
 
 def _why(name: str, real: Realization, factors: dict[str, float], peaks: Mapping[str, BlockPeak],

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from patchgen.design.lqg import Design
 from patchgen.inputs.errors import InputError
 from patchgen.patch.build import build_patch
+from patchgen.patch.differences import without_differentiators
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.realization import realize
 from patchgen.patch.snr_scaling import Scaling, block_peaks, snr_scales
@@ -81,7 +82,7 @@ def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: N
         for r in rs:
             for a, v in r.amp_peaks_V:
                 peaks[a] = max(peaks.get(a, 0.0), v)
-    real = realize(d, machine)
+    real = without_differentiators(realize(d, machine), machine)  # the blocks build_patch places
     scaling = snr_scales(real, block_peaks(real, {a.id: a.carries.quantity for a in net.amplifiers}, peaks), machine)
     if not scaling.changes:
         return ScaledPatch(net, scaling, runs)

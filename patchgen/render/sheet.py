@@ -123,7 +123,8 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
     wires = [{"n": i + 1, "from": f, "to": t} for i, (f, t) in enumerate(wire_list(net))]
 
     ics = [{"id": a.id, "role": a.role,
-            "ic": "0 V" if a.ic_V is None else f"{a.ic_V:g} V",
+            "ic": ("settled on its input (runs while the pendulum is held)" if a.role == "integrator" else "0 V")
+            if a.ic_V is None else f"{a.ic_V:g} V",
             "carries": _carries(a)}
            for a in net.amplifiers if a.role in ("integrator", "lag")]
 

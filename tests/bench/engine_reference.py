@@ -165,7 +165,7 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
         for k in range(2):
             nz_f[k] = gauss[0, ns + na + k] * fns[k] / math.sqrt(1.0 - fna[k] * fna[k])
     xp = x0.copy()
-    za = ic.copy()
+    za = np.where(np.isnan(ic), 0.0, ic)
     nf = 0
     for i in range(ns):
         nf = max(nf, filt[i] + 1)
@@ -193,6 +193,19 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
         for j in range(na):
             if amp_kind[j] == DIFFERENTIATOR:
                 za[j] -= raw[j] / param1[j]
+    # an integrator with no IC (NaN) starts settled: the state where its slope is zero, by bisection
+    # on the slope (it falls as the state rises: the integrator closes a lag)
+    for j in range(na):
+        if math.isnan(ic[j]):
+            lo_z, hi_z = -1e3, 1e3
+            for _ in range(200):
+                za[j] = 0.5 * (lo_z + hi_z)
+                _circuit(xp, za, xf, 0.0, quiet_s, quiet_a, sensor_state, sensor_gain, quantum, filt, amp_kind,
+                         in_ptr, in_src, in_gain, param1, param2, drift, sat, False, sig, raw, zt)
+                if zt[j] > 0.0:
+                    lo_z = za[j]
+                else:
+                    hi_z = za[j]
     xa = 0.0
     tripped = False
     fallen = False

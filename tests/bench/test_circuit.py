@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from patchgen.bench.circuit import DIFFERENTIATOR, INTEGRATOR, SUMMER, compile_circuit
@@ -79,3 +80,41 @@ def test_unknown_source_names_the_field(data):
     with pytest.raises(InputError) as exc:
         compile_circuit(Netlist.model_validate(data), GP6, UW)
     assert "inputs[0].source" in exc.value.field and "A9" in exc.value.message
+
+
+def _patched(design: str, machine: str):
+    from patchgen.patch.build import build_patch
+    from tests.conftest import design_from_path, design_path
+
+    d, m = design_from_path(design_path(design), machine)
+    return d, m, build_patch(d, m)
+
+
+def test_internal_rates_are_the_compensators_modes():
+    """bench-lqg on THE ANALOG THING keeps all five states of its compensator, one of them at
+    1259 1/s: the circuit's own modes are the eigenvalues of the design's A_c (a similarity), to
+    the pots' quantisation (measured 0.11 % on the fastest), and the step resolves the fastest."""
+    from patchgen.bench.configure import engine_config
+    from patchgen.inputs.scenario import Scenario, load_scenario
+
+    d, m, net = _patched("bench-lqg", "the-analog-thing")
+    c = compile_circuit(net, m, UW)
+    modes = np.sort(np.abs(np.linalg.eigvals(d.controller.Ac)))
+    assert len(modes) == 5 and modes[-1] > 1000
+    np.testing.assert_allclose(np.sort(c.internal_rates()), modes, rtol=5e-3)
+    assert c.time_rates() == []  # no lag or differentiator element: only the modes show the fast one
+    base = load_scenario(ROOT / "sims" / "hold-120s.toml")
+    for ideal in (True, False):
+        _, settings = engine_config(c, d.plant, UW, m, Scenario.model_validate(base.model_dump()), ideal=ideal)
+        assert settings.dt_s <= 1.0 / modes[-1] * (1 + 1e-9)
+
+
+def test_a_difference_has_its_lags_mode():
+    """On the LUCIDAC the rate is theta minus its lag, an integrator closed through a summer: no
+    element has the roll-off as its time constant, the circuit's mode does (1 / rolloff)."""
+    d, m, net = _patched("bench-recommended", "lucidac")
+    c = compile_circuit(net, m, UW)
+    assert c.time_rates() == []
+    rolloff = d.estimator.rolloff_s
+    fast = max(c.internal_rates())
+    assert fast == pytest.approx(1.0 / rolloff, rel=5e-3)

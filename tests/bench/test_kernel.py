@@ -81,8 +81,8 @@ def test_sincos_is_libm_to_a_few_ulp():
         assert abs(c - math.cos(x)) <= 4e-16 * max(1.0, abs(x) / 10)
 
 
-def _config(design: str, scenario: str, *, ideal=False, spread=None, duration=None):
-    d, machine = design_from_path(design_path(design))
+def _config(design: str, scenario: str, *, ideal=False, spread=None, duration=None, machine=None):
+    d, machine = design_from_path(design_path(design), machine)
     net = build_patch(d, machine)
     base = load_scenario(SIMS / f"{scenario}.toml").model_dump()
     if duration:
@@ -100,6 +100,8 @@ CASES = {  # held with noise and drift; tripped with overloads; ideal with a pus
     "spread": ("bench-recommended", "step-cart", False, {"M": 0.2, "l": 0.2, "b_VF": 0.2}, None),
     # a motor at its amplifier's limit, encoder counts, a filtered velocity; the rigid pendulum
     "motor": ("quanser-ip02", "ip02-release-5deg", False, None, 3.0),
+    # a machine without a differentiator: the rate from theta minus its lag, the lag starting settled
+    "difference": ("bench-recommended", "offset-10deg", False, None, 3.0, "lucidac"),
 }
 
 
@@ -107,8 +109,8 @@ CASES = {  # held with noise and drift; tripped with overloads; ideal with a pus
 def test_blocks_match_the_per_run_loop(case):
     """70 runs (a full block and part of another) against the old one-run loop fed the same
     normals: the same events at the same steps, figures and histories to 1e-9."""
-    design, scenario, ideal, spread, duration = CASES[case]
-    cfg = _config(design, scenario, ideal=ideal, spread=spread, duration=duration)
+    design, scenario, ideal, spread, duration, *machine = CASES[case]
+    cfg = _config(design, scenario, ideal=ideal, spread=spread, duration=duration, machine=(machine or [None])[0])
     draws = draw_batch(cfg, [np.random.default_rng([3, i]) for i in range(70)])
     new = run_batch(cfg, draws, 1)
     ref = reference_runs(cfg, draws)
@@ -121,6 +123,8 @@ def test_blocks_match_the_per_run_loop(case):
     np.testing.assert_allclose(new.history[0, :k], ref["history"][0, :k], rtol=1e-9, atol=1e-9)
     if case == "trip":
         assert not np.isnan(new.trip_time).any() and not np.isnan(new.overload_first).all()
+    if case == "difference":  # the path the case is for was taken: a lag with no IC, settled on theta
+        assert np.isnan(cfg.wiring.ic).sum() == 1
     if case == "motor":  # the paths the case is for were taken
         assert (new.limit_time > 0).all() and cfg.sensors.quantum.any() and (cfg.sensors.filt >= 0).any()
 

@@ -67,13 +67,29 @@ def sensor_inputs(history: dict[str, np.ndarray], plan) -> callable:
     return acl_in
 
 
+def start(plan, history: dict[str, np.ndarray]) -> np.ndarray:
+    """Each integrator's state at t = 0 (machine units) where patchgen's run starts it: the
+    netlist's integrators at their first recorded value (a lag of a difference starts settled), a
+    sensor buffer settled on minus its sensor."""
+    x0 = np.zeros(8)
+    for e in plan.elements:
+        if e.kind != "int":
+            continue
+        if e.amp in plan.sensor_acl:
+            x0[e.index] = -plan.sensor_volts_per_unit[e.amp] * history[e.amp][0] / plan.reference_V
+        else:
+            x0[e.index] = history[e.name][0] / (plan.reference_V * e.scale)
+    return x0
+
+
 def replay(circuit, plan, history: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """The circuit driven by the recorded sensors: each element's output and u_c at the output
     jack, in volts (machine units x reference_V; an element that carries its signal scaled down,
     times its scale), at patchgen's recorded times."""
     sim = Replay(circuit, sensor_inputs(history, plan))
     t = history["t"]
-    res = sim.solve_ivp(float(t[-1]), t_eval=t, method="LSODA", rtol=1e-8, atol=1e-10, max_step=1e-3)
+    res = sim.solve_ivp(float(t[-1]), ics=start(plan, history), ics_sign=1, t_eval=t, method="LSODA", rtol=1e-8,
+                        atol=1e-10, max_step=1e-3)
     assert res.status == 0, res.message
     out: dict[str, list[float]] = {e.name: [] for e in plan.elements}
     out["u_c"] = []

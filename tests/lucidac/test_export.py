@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
+from importlib import resources
 
 import numpy as np
 import pytest
@@ -23,7 +25,7 @@ from patchgen.render.lucidac_files import export_files  # noqa: E402
 from .replay import Replay, replay  # noqa: E402
 
 TOLERANCE = 0.01  # of each signal's peak (the issue's criterion)
-STEP_S, RECORD_S = 1e-4, 1e-3  # patchgen's engine step for the reference (its ideal default is 10 ms), and its record
+RECORD_S = 1e-3  # patchgen's record of its own run, at its default step (the difference's lag sets it: 6.3 ms)
 # lucipy's check counts multipliers 0 and 1 as in use when identity elements (whose inputs are
 # theirs, circuits.DefaultLUCIDAC.make) are: these notices, and only these, are expected
 MULTIPLIER_NOTICE = "Multiplier"
@@ -33,8 +35,7 @@ MULTIPLIER_NOTICE = "Multiplier"
 def exported():
     inputs = load_inputs("bench-recommended", machine="lucidac")
     report = run_export(inputs, ExportPlan(run_s=10.0, scenario="offset-10deg"))
-    sc = scenario_for("offset-10deg", inputs.spec, 1, True).model_copy(update={"dt_s": STEP_S,
-                                                                                "record_dt_s": RECORD_S})
+    sc = scenario_for("offset-10deg", inputs.spec, 1, True).model_copy(update={"record_dt_s": RECORD_S})
     plant = design_on(inputs.spec, inputs.machine, inputs.bench).plant
     own = simulate(report.netlist, plant, inputs.bench, inputs.machine, sc, ideal=True).history
     return report, own
@@ -93,14 +94,13 @@ def test_replay_agrees_with_patchgen(exported):
     assert set(errors) >= {"u_c", "I0", "I1", "ID0", "ID1"}
     for name, (err, peak) in errors.items():
         assert err < TOLERANCE, f"{name}: {err:.3%} of its peak {peak:.3g} V"
-    assert errors["u_c"][1] > 100  # ideal: the differentiator's kick at t = 0 (theta steps, its lag starts at 0)
+    assert 1.0 < errors["u_c"][1] < 10.0  # the lag starts settled on theta: no kick at t = 0, no overload
 
 
-@pytest.mark.parametrize("source", ["I0", "s_dot"])
+@pytest.mark.parametrize("source", ["I0", "s_dot", "s"])
 def test_replay_fails_for_a_wrong_sign(exported, source):
-    """One lane into u_c's element with its sign flipped: the lag of theta (9.15, measured 4.4 % of
-    the peak) or s_dot's buffer (4.48, 7.9 %). (A flip of s's lane, 0.107, moves u_c by 0.09 % of
-    its 184 V peak, the ideal run's kick at t = 0: below what 1 % of the peak can see.)"""
+    """One lane into u_c's element with its sign flipped: the lag of theta (measured 200 % of u_c's
+    peak), s_dot's buffer (23 %) or s's, the smallest coefficient (0.107: 1.6 %)."""
     report, own = exported
     lp = report.lanes
     feeder = next(e.name for e in lp.elements if e.amp == source)
@@ -108,7 +108,7 @@ def test_replay_fails_for_a_wrong_sign(exported, source):
     flipped = dataclasses.replace(lp.lanes[k], coeff=-lp.lanes[k].coeff)
     wrong = dataclasses.replace(lp, lanes=lp.lanes[:k] + (flipped,) + lp.lanes[k + 1:])
     err, _ = _errors(lp, own, replay(circuit(wrong), wrong, own))["u_c"]
-    assert err > 4 * TOLERANCE
+    assert err > TOLERANCE
 
 
 def test_replay_is_lucipys_simulation_where_lucipy_models_the_machine(exported):
@@ -143,9 +143,10 @@ def test_emulator_accepts_and_runs_the_configuration(exported):
 
 
 def test_the_export_says_how_the_patch_does_on_the_bench(exported, tmp_path):
-    """The patch is predicted on the bench as patch's sheet predicts it, and a patch that falls is
-    not handed out unsaid: bench-recommended on the LUCIDAC does not hold every scenario on uw-1991
-    (measured: step-cart 0 %), and the command says so in one line."""
+    """The patch is predicted on the bench as patch's sheet predicts it: bench-recommended on the
+    LUCIDAC holds every scenario on uw-1991. A patch that falls is not handed out unsaid: on a
+    LUCIDAC whose integrators' offsets were ten times the profile's (10 mV), the lag of theta drifts
+    the rate it gives, the cart runs to the track's end, and the command says so in one line."""
     from tests.cli_run import run_patchgen
 
     report, _ = exported
@@ -153,7 +154,14 @@ def test_the_export_says_how_the_patch_does_on_the_bench(exported, tmp_path):
     assert pred is not None and [p.scenario for p in pred.predictions] == ["offset-10deg", "finger-push",
                                                                           "step-cart", "hold-120s"]
     assert report.summary()["prediction"] == pred.summary()
-    assert not pred.holds and any(p.fraction_held < 0.95 for p in pred.predictions)
+    assert pred.holds and all(p.fraction_held >= 0.95 for p in pred.predictions)
+    assert all(lv.peak_share <= 1.0 for lv in pred.levels)  # no element past the reference
     r = run_patchgen("export", "bench-recommended", "--machine", "lucidac", "-o", tmp_path / "out")
+    assert r.returncode == 0
+    assert "predicted on the uw-1991 bench: held in every scenario" in r.stdout
+    text = (resources.files("patchgen.profiles") / "machines" / "lucidac.toml").read_text()
+    drifting = tmp_path / "lucidac-drifting.toml"
+    drifting.write_text(re.sub(r"(?m)^integrator_offset_V = .*$", "integrator_offset_V = 0.01", text))
+    r = run_patchgen("export", "bench-recommended", "--machine", drifting, "-o", tmp_path / "drifting")
     assert r.returncode == 0
     assert "Predicted to fail on the uw-1991 bench: held in " in r.stdout

@@ -160,7 +160,8 @@ class Outputs(NamedTuple):
     results: np.ndarray  # (runs, len(RESULTS))
     overload_first: np.ndarray  # (runs, amplifiers) s
     overload_time: np.ndarray  # (runs, amplifiers) s
-    amp_peak: np.ndarray  # (runs, amplifiers) V: the largest |output| at a step's start, rails ignored
+    amp_peak: np.ndarray  # (runs, amplifiers) V: the largest |output| at a step's start, rails ignored, while
+    # the pendulum is up (a fallen pendulum's swings are not what the patch was scaled for)
     history: np.ndarray  # (history runs, samples, H_AMPS + amplifiers)
     history_length: np.ndarray  # samples recorded per history run
 
@@ -365,10 +366,10 @@ def _summaries(n, t, end, lo, alive, tripped, fallen, xp, raw, pinned, sig, out_
     for l in range(nl):  # apart: a loop storing into one array (fig) vectorises
         events += alive[l] & (tripped[l] | ((abs(xp[THETA, l]) > fall) & (not fallen[l])))
     overloads = 0
-    for j in range(raw.shape[0]):  # and each amplifier's peak, before the rails (an ended lane's no longer read)
-        for l in range(nl):
+    for j in range(raw.shape[0]):  # and each amplifier's peak, before the rails, while the pendulum is up
+        for l in range(nl):  # (to the step its fall is seen at; an ended lane's no longer read)
             a = abs(raw[j, l])
-            over[2, j, l] = a if a > over[2, j, l] else over[2, j, l]
+            over[2, j, l] = a if (a > over[2, j, l]) & (not fallen[l]) else over[2, j, l]
             overloads += alive[l] & ((a > sat) | pinned[j, l])
     if overloads:  # the first time, and the time up to the run's last sample
         for j in range(raw.shape[0]):

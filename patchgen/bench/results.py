@@ -53,6 +53,7 @@ class RunSummary:
     final_state: tuple[float, float, float, float]
     drawn: tuple[tuple[str, float], ...] = ()  # the run's plant (--spread) and bench (--bench-spread) draws
     amp_peaks_V: tuple[tuple[str, float], ...] = ()  # each amplifier's largest |output| (V, before the rails)
+    # while the pendulum is up (to its fall, in a run that falls)
 
     def amp_peak(self, amplifier: str) -> float:
         """One amplifier's largest |output| over the run (V, before the rails; 0 when not recorded)."""

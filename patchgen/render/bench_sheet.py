@@ -67,7 +67,8 @@ def levels_section(pred: BenchPrediction, net: Netlist) -> SheetSection:
              "-" if lv.snr_dB == float("inf") else f"{lv.snr_dB:.0f}",
              "low" if lv.peak_share < LOW_SHARE else ("past the reference" if lv.peak_share > 1 else "")]
             for lv in pred.levels]
-    note = (f"The largest |output| of each amplifier over every run above, as a share of the reference "
+    note = (f"The largest |output| of each amplifier over every run above while the pendulum is up (a run "
+            f"that falls: up to its fall), as a share of the reference "
             f"(+/-{net.reference_V:g} V), and over the machine's noise floor (its amplifier noise and "
             f"integrator offset together). A signal that uses little of its range carries the machine's "
             f"noise, offsets and the settings' step at that much more weight; 'low' marks one under "

@@ -107,9 +107,10 @@ def _overloads(over: list[str]) -> str:
 
 
 def peaks_table(result: SimResult) -> Table:
-    """Each amplifier's largest |output| over a run as a share of the rails (before them: past 100 %
-    is an overload), run 0's and, for a Monte Carlo, the median and the 5th to 95th percentiles:
-    how much of its range a signal uses, so how far above the machine's noise and offsets it lives."""
+    """Each amplifier's largest |output| over a run while the pendulum is up, as a share of the rails
+    (before them: past 100 % is an overload), run 0's and, for a Monte Carlo, the median and the 5th
+    to 95th percentiles: how much of its range a signal uses, so how far above the machine's noise
+    and offsets it lives."""
     d, r0 = result.distribution, result.runs[0]
     many = d.runs > 1
     rails = result.settings.saturation_V

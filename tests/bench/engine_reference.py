@@ -320,11 +320,13 @@ def _one_run(r, sign, gauss, h, n_steps, stride, x0, p, limit_on,
             mf = max(mf, abs(force))
             if limited and not last:
                 lim_t[r] += h
+            up = not fallen  # the peaks are the balancing's: up to the step the fall is seen at
             if not fallen and abs(th) > fall_angle:
                 fallen = True
                 fall_t[r] = t
             for j in range(na):
-                amp_peak[r, j] = max(amp_peak[r, j], abs(raw[j]))
+                if up:
+                    amp_peak[r, j] = max(amp_peak[r, j], abs(raw[j]))
                 if abs(raw[j]) > sat or pinned[j]:
                     if math.isnan(ovl_first[r, j]):
                         ovl_first[r, j] = t

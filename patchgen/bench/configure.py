@@ -51,7 +51,7 @@ SPREAD_ORDER = tuple(k for k in VECTOR_PARAMETERS if k not in ("J", "F_C"))
 def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
                   machine: MachineProfile, scenario: Scenario, *,
                   ideal: bool = False, spread: dict[str, float] | None = None,
-                  bench_spread: bool = False) -> tuple[EngineConfig, SimSettings]:
+                  bench_spread: bool = False, rails: bool = True) -> tuple[EngineConfig, SimSettings]:
     """Resolve profiles, scenario and ``ideal`` into the engine's records, and a readable account.
 
     Parameters
@@ -71,6 +71,9 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     bench_spread : bool
         Each run draws its bench from the profile's ``[uncertainty]`` ranges (those the
         simulation feels: patchgen.bench.bench_spread.active_ranges).
+    rails : bool
+        False: no amplifier clips at its rails, every other imperfection kept: the patch's signals
+        as its linear circuit makes them (what a scaling for signal-to-noise scales).
 
     Returns
     -------
@@ -159,7 +162,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     cfg = EngineConfig(
         settings=Settings(
             dt=float(step), steps=int(n_steps), stride=int(stride), saturation=float(imp.saturation_V),
-            clip=not ideal, limit_switches=cut is not None,
+            clip=not ideal and rails, limit_switches=cut is not None,
             fall_angle=math.radians(scenario.fall_angle_deg), output=int(circuit.output_index),
             x0=np.array(scenario.initial.vector(), dtype=np.float64),
             actuator=int(model)),
@@ -185,7 +188,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         integrator_drift_V_per_s=drift,
         cart_force_N_rms=levels.cart_force_N_rms, tip_force_N_rms=levels.tip_force_N_rms,
         force_bandwidth_Hz=levels.force_bandwidth_Hz,
-        saturation_V=imp.saturation_V, saturation_clipped=not ideal,
+        saturation_V=imp.saturation_V, saturation_clipped=not ideal and rails,
         actuator=act_text, limit_switches=bool(bench.track.limit_switches),
         half_track_m=plant.d / 2, watchdog_m=bench.track.watchdog_m,
         plant_spread={k: v for k, v in spread.items() if v},

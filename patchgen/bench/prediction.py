@@ -100,16 +100,18 @@ def predict(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: Mach
 def standard_runs(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
                   runs_hold: int = 20, scenarios: tuple[str, ...] | None = None,
                   done: dict[str, list[RunSummary]] | None = None,
-                  bench_spread: bool = False) -> dict[str, list[RunSummary]]:
+                  bench_spread: bool = False, rails: bool = True) -> dict[str, list[RunSummary]]:
     """The runs :func:`predict` sums up, by scenario name: ``runs_hold`` noise seeds of the long
     hold, one run of each other scenario at its own seed (``done``'s where it has them), side by
-    side on the cores (the engine releases the interpreter), the long hold first."""
+    side on the cores (the engine releases the interpreter), the long hold first; with ``rails``
+    False, no amplifier clips (patchgen.bench.simulate)."""
     def one(sc: Scenario) -> list[RunSummary]:
         runs = runs_hold if sc.name == "hold-120s" else 1
         if done is not None and len(done.get(sc.name, ())) >= runs:
             return done[sc.name][:runs]
         return _side_by_side(lambda first, n: simulate(net, plant, bench, machine, sc, runs=n, first_run=first,
-                                                       keep_history=False, bench_spread=bench_spread).runs, runs)
+                                                       keep_history=False, bench_spread=bench_spread,
+                                                       rails=rails).runs, runs)
 
     loaded = [load_scenario(given) for given in scenarios or bench_scenarios(bench)]
     order = sorted(range(len(loaded)), key=lambda i: loaded[i].name != "hold-120s")

@@ -49,7 +49,7 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
              keep_history: bool = True,
              progress: Callable[[int], None] | None = None,
              spread: dict[str, float] | None = None, first_run: int = 0,
-             bench_spread: bool = False) -> SimResult:
+             bench_spread: bool = False, rails: bool = True) -> SimResult:
     """Simulate ``runs`` runs of the scenario (seed from the argument, else the scenario's).
 
     Run i draws from ``numpy.random.default_rng([seed, i])`` (drift signs, the key of its
@@ -84,6 +84,8 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     bench_spread : bool
         Each run draws its bench (actuator, sensor constants, noise levels, random forces) from
         the profile's ``[uncertainty]`` ranges (patchgen.bench.bench_spread), after its other draws.
+    rails : bool
+        False: no amplifier clips at its rails, every other imperfection kept (a scaling's envelope).
 
     Returns
     -------
@@ -99,7 +101,7 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     if first_run < 0:
         raise ValueError(f"first_run must be at least 0 (got {first_run})")
     cfg, settings = engine_config(circuit, plant, bench, machine, scenario, ideal=ideal, spread=spread,
-                                  bench_spread=bench_spread)
+                                  bench_spread=bench_spread, rails=rails)
     budget.check(scenario, runs, step=cfg.settings.dt, stride=cfg.settings.stride, history=keep_history,
                  usual_step=default_step([], ideal))
 

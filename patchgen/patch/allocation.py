@@ -22,6 +22,7 @@ matrix) needs no polarity search: every block is at polarity +1 and an input is 
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass, replace
 
 from patchgen.inputs.errors import ResourceError
@@ -167,17 +168,26 @@ def _place(real: Realization, blocks: list[Block], kept: dict[str, list[Term]], 
             if have == need or machine.signed_coefficients:
                 direct.append((t.signal, have, t.coeff))
             elif t.signal in inverted:
-                direct.append((f"inv:{t.signal}", -have, t.coeff))
+                g = real.inverter_gains.get(t.signal, 1.0)  # a sensor's inverter may amplify it
+                wanted[(b.name, t.signal, t.coeff / g)] = t.wanted / g
+                direct.append((f"inv:{t.signal}", -have, t.coeff / g))
             else:
                 staged.append((t.signal, have, t.coeff))
             wanted[(b.name, t.signal, t.coeff)] = t.wanted
         if staged:
-            # pre-summer output = -sum |c| (have v) = -P sum c v: enters the block with weight 1
+            # pre-summer output = -beta sum |c| (have v) = -P beta sum c v: enters the block 1 / beta times
+            # (weight 1, no pot, when beta is 1: patchgen.patch.snr_scaling chooses beta)
+            beta = b.partial_scale
+            if beta != 1.0:
+                for sig, _, c in staged:
+                    wanted[(b.name, sig, c * beta)] = wanted[(b.name, sig, c)] * beta
+                staged = [(sig, have, c * beta) for sig, have, c in staged]
             stages.append(_Stage(f"pre:{b.name}", "summer", tuple(staged), b.name, -P[b.name], None))
-            direct.append((f"pre:{b.name}", None, None))
+            direct.append((f"pre:{b.name}", None, None if beta == 1.0 else 1.0 / beta))
         stages.append(_Stage(b.name, ROLE[b.kind], tuple(direct), b.name, P[b.name], b))
     for sig in sorted(inverted):
-        stages.insert(0, _Stage(f"inv:{sig}", "inverter", ((sig, None, 1.0),), sig, -P.get(sig, 1), None))
+        stages.insert(0, _Stage(f"inv:{sig}", "inverter", ((sig, None, real.inverter_gains.get(sig, 1.0)),), sig,
+                                -P.get(sig, 1), None))
     _check_resources(stages, machine, source)
     return _emit(real, machine, stages, P, notes, wanted, source)
 
@@ -236,7 +246,8 @@ def _needs_pot(mag: float, machine: MachineProfile) -> bool:
 
 def _assign_slots(stages: list[_Stage], machine: MachineProfile, source: str) -> dict[str, str]:
     """Most constrained first: integrators and lags on integrator slots, then the rest on slots
-    that cannot integrate, keeping integrators free."""
+    that cannot integrate, keeping integrators free; among those, one whose input jacks take the
+    stage's weights (an inverter with a gain needs a x10 input an inverter-only slot may lack)."""
     free = list(machine.amplifiers)
     out: dict[str, str] = {}
     order = sorted(stages, key=lambda s: (0 if SLOT_ROLE[s.role] == "integrator" else
@@ -244,7 +255,9 @@ def _assign_slots(stages: list[_Stage], machine: MachineProfile, source: str) ->
     for st in order:
         want = SLOT_ROLE[st.role]
         fits = [a for a in free if want in a.roles]
-        fits.sort(key=lambda a: ("integrator" in a.roles and want != "integrator", len(a.roles)))
+        need = Counter(min(machine.input_weights) if c is None else weight_for(abs(c), machine) for _, _, c in st.terms)
+        fits.sort(key=lambda a: (any(a.input_count(w) < k for w, k in need.items()),
+                                 "integrator" in a.roles and want != "integrator", len(a.roles)))
         if not fits:
             raise ResourceError(source, "machine", f"no free amplifier of {the_machine(machine.name)} can be a "
                                 f"{want} for {st.key}")
@@ -305,10 +318,13 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
         quantity = st.out_signal
         if b is not None:
             vpu, unit = b.volts_per_unit, b.unit
-        elif st.out_signal in blocks:
-            vpu, unit = blocks[st.out_signal].volts_per_unit, blocks[st.out_signal].unit
-        else:
-            vpu, unit = real.sensors[st.out_signal], SENSOR_UNITS[st.out_signal]
+        elif st.out_signal in blocks:  # an inverter of a block, or a partial sum (times its partial_scale)
+            whole = blocks[st.out_signal]
+            part = whole.partial_scale if st.key.startswith("pre:") else 1.0
+            vpu, unit = whole.volts_per_unit * part, whole.unit
+        else:  # a sensor's inverter, at its gain
+            vpu, unit = real.sensors[st.out_signal] * real.inverter_gains.get(st.out_signal, 1.0), SENSOR_UNITS[
+                st.out_signal]
         purpose = (b.purpose if b is not None else
                    f"partial sum for {st.out_signal} (terms needing the other sign)" if st.key.startswith("pre:")
                    else f"inverts {st.out_signal}")

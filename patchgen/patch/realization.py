@@ -61,6 +61,8 @@ class Block:
     mode: str | None = None  # an integrate block's integrator mode (patchgen.patch.time_scales)
     settles: bool = False  # an integrate block that starts settled on its input, as a differentiator does
     # (a lag closed through a difference: it runs while the pendulum is held, so it has no IC of its own)
+    partial_scale: float = 1.0  # a partial sum of its terms (patchgen.patch.allocation's pre-summer) carries
+    # them times this, and the block takes it 1 / this times: below 1 to keep the partial sum inside the reference
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,8 @@ class Realization:
     below_resolution: str
     notes: tuple[str, ...] = ()
     labels: dict[str, str] = field(default_factory=dict)  # sensor id -> what reads it, where the spec says
+    inverter_gains: dict[str, float] = field(default_factory=dict)  # sensor id -> the gain its inverter (where
+    # the allocation needs one) takes it at, its consumers taking the inverter 1 / gain times (signal-to-noise)
 
     def label(self, sensor: str) -> str:
         """What reads a sensor, as the sheet names it: the spec's word, else the thesis bench's instrument."""

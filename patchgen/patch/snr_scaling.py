@@ -17,6 +17,11 @@ ASPLOS 2020), is an optimisation, here a pair of linear programmes in y = ln alp
    every amplifier of a machine);
 2. with that held, maximise the sum of ln alpha (every other signal as large as it may be);
 
+a partial sum (a pre-summer of a block's terms of the other sign) and a sensor's inverter, stages
+the allocation adds, have scales of their own too, each costing a pot where it was wired straight:
+they move where the worst signal (stage 1) or an overload needs it, stage 2 prices them
+(STAGE_COST), and one within HEADROOM that would gain less than STAGE_WORTH keeps its scale;
+
 subject to
 
 - no amplifier's predicted peak (the bench Monte Carlo's envelope, supplied by the caller) past
@@ -49,6 +54,11 @@ from patchgen.profiles.machine import MachineProfile
 HEADROOM = 0.8  # the largest share of the reference a predicted peak may reach: room for runs the envelope missed
 DIAL_SHARE = 0.01  # a pot whose dial step is more than this share of its setting limits the law it sets
 FIXED = ("u_c",)  # blocks whose scale the bench fixes (the servo amplifier's input, 1 V per V)
+PARTIAL = "partial "  # a block's partial sum, as the netlist names what its pre-summer carries
+INVERTED = "inverted "  # a sensor's inverter (the netlist: an inverter carrying the sensor's quantity)
+STAGE_COST = 1e-3  # stage 2's price of scaling a partial sum or an inverter (a pot more): only where the worst
+# signal (stage 1) or an overload needs it
+STAGE_WORTH = 2.0  # a stage within HEADROOM is scaled only if that raises it this much (6 dB): else not worth a pot
 INSIDE = 1e-6  # relative: every limit is kept this far inside, so a coefficient at a limit stays within it
 STAGE_ONE_SLACK = 1e-9  # relative: stage 2 keeps stage 1's optimum to this (the solver's tolerance)
 
@@ -92,7 +102,9 @@ def dial_limits(setting: float, resolution: float) -> bool:
     return 0.0 < setting and resolution > DIAL_SHARE * setting
 
 
-def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: MachineProfile) -> Scaling:
+def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: MachineProfile,
+               partials: Mapping[str, frozenset[str]] | None = None,
+               inverters: Mapping[str, frozenset[str]] | None = None) -> Scaling:
     """The factor each block's voltage is multiplied by (1: kept), see the module docstring.
 
     Parameters
@@ -104,21 +116,37 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
         with a zero peak, keeps its scale (nothing predicts how large it gets).
     machine : MachineProfile
         Its reference, largest weighted input, input weights and dial step.
+    partials : mapping of str to frozenset of str, optional
+        For a block whose terms of the other sign a partial sum (a pre-summer) takes, the signals it
+        takes; with its peak in ``peaks`` as "partial <block>", the partial sum gets a scale of its
+        own (the block takes it at the inverse, on a pot): "partial <block>" in the factors.
+    inverters : mapping of str to frozenset of str, optional
+        For a sensor the allocation inverts, the blocks that take it through its inverter; with
+        the inverter's peak in ``peaks`` as "inverted <sensor>", the inverter gets a gain of its own
+        (its consumers take it at the inverse): "inverted <sensor>" in the factors.
 
     Returns
     -------
     Scaling
-        Block name -> factor for every block the realisation has, and why each scaled one stopped.
+        Block name (and "partial <block>") -> factor for every block the realisation has, and why
+        each scaled one stopped.
     """
     from scipy.optimize import linprog  # 0.1 s of import, only where a scaling is chosen
 
     ref = machine.reference_V
+    partials = {b: s for b, s in (partials or {}).items()
+                if any(x.name == b for x in real.blocks) and peaks.get(PARTIAL + b, BlockPeak(0, 0)).least > 0}
+    peaks = _partials_joined(peaks, partials)
+    inverters = {s: b for s, b in (inverters or {}).items()
+                 if s in real.sensors and peaks.get(INVERTED + s, BlockPeak(0, 0)).least > 0}
     free = [b.name for b in real.blocks if b.name not in FIXED and peaks.get(b.name, BlockPeak(0, 0)).least > 0]
-    out = {b.name: 1.0 for b in real.blocks}
+    free += [PARTIAL + b for b in partials]  # a partial sum's own scale (its voltage over the sensor constants')
+    free += [INVERTED + s for s in inverters]  # a sensor's inverter's gain
+    out = {b.name: 1.0 for b in real.blocks} | {x: 1.0 for x in free}
     if not free:
         return Scaling(out, {})
     col = {name: i for i, name in enumerate(free)}
-    n = len(free)  # variables: y_b for each free block, then t
+    n = len(free)  # variables: y_b for each free block and partial sum, then t
     rows, rhs, eq_rows, eq_rhs = [], [], [], []
     bounds = []
 
@@ -136,39 +164,36 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
             bounds.append((0.0, max(0.0, top)))
             rows.append(row({col[name]: -1.0, n: 1.0}))  # t <= ln(least / ref) + y_b
             rhs.append(math.log(p.least / ref))
-            gain[col[name]] = 1.0
+            gain[col[name]] = -STAGE_COST if name.startswith((PARTIAL, INVERTED)) else 1.0
         else:  # past HEADROOM already: down towards it as far as its coefficients allow, never up
             bounds.append((top, 0.0))
             gain[col[name]] = -1.0
     bounds.append((None, None))
     top_c, floor, weights = max(machine.input_weights) * machine.pot_max, dial_floor(machine), machine.input_weights
     consumers = _consumers(real)
-    for b in real.blocks:
-        if b.kind == "differentiate":
-            continue  # its input is a sensor; its scale is its T_d (an external part's value), not a coefficient
-        for term in b.terms:
-            c = abs(term.coeff)
-            coef = {}
-            if b.name in col:
-                coef[col[b.name]] = 1.0
-            if term.signal in col:
-                coef[col[term.signal]] = coef.get(col[term.signal], 0.0) - 1.0
-            coef = {i: v for i, v in coef.items() if v != 0.0}
-            if c == 0.0 or not coef:
-                continue
-            if _straight(term, c, weights, machine, consumers):
-                eq_rows.append(row(coef))  # wired straight: stays a weight exactly
-                eq_rhs.append(0.0)
-                continue
-            rows.append(row(coef))  # ln c + d <= ln max(top, c)
-            rhs.append(max(0.0, math.log(top_c / c) + math.log1p(-INSIDE)) if c < top_c else 0.0)
-            rows.append(-row(coef))  # ln c + d >= ln min(c, floor)
-            rhs.append(-math.log(floor / c) if c > floor else 0.0)
+    for taker, term in _coefficients(real, partials, inverters):
+        c = abs(term.coeff)
+        coef = {}
+        if taker in col:
+            coef[col[taker]] = 1.0
+        if term.signal in col:
+            coef[col[term.signal]] = coef.get(col[term.signal], 0.0) - 1.0
+        coef = {i: v for i, v in coef.items() if v != 0.0}
+        if c == 0.0 or not coef:
+            continue
+        if not _staged(taker, term) and _straight(term, c, weights, machine, consumers):
+            eq_rows.append(row(coef))  # wired straight: stays a weight exactly
+            eq_rhs.append(0.0)
+            continue
+        rows.append(row(coef))  # ln c + d <= ln max(top, c)
+        rhs.append(max(0.0, math.log(top_c / c) + math.log1p(-INSIDE)) if c < top_c else 0.0)
+        rows.append(-row(coef))  # ln c + d >= ln min(c, floor)
+        rhs.append(-math.log(floor / c) if c > floor else 0.0)
     A, b_ub = np.array(rows), np.array(rhs)
     A_eq, b_eq = (np.array(eq_rows), np.array(eq_rhs)) if eq_rows else (None, None)
     if not gain[:n].any():
         return Scaling(out, {})
-    if (gain[:n] > 0).any():  # stage 1: the worst share of the reference
+    if np.any(A[:, n] > 0):  # stage 1 (a signal within HEADROOM to raise): the worst share of the reference
         first = linprog(-row({n: 1.0}), A_ub=A, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds, method="highs")
         t_star = first.x[n]
         A = np.vstack([A, -row({n: 1.0})])
@@ -178,7 +203,49 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
     y = second.x[:n]
     for name, v in zip(free, y):
         out[name] = math.exp(v)
-    return Scaling(out, {b: _why(b, real, out, peaks, machine) for b in free if out[b] != 1.0})
+    small = {x for x in free if x.startswith((PARTIAL, INVERTED)) and 1.0 < out[x] < STAGE_WORTH
+             and peaks[x].most <= HEADROOM * ref}
+    if small:  # not worth a pot: those stages stay as they were, and the others are chosen again
+        return snr_scales(real, peaks, machine, {b: s for b, s in partials.items() if PARTIAL + b not in small},
+                          {s: b for s, b in inverters.items() if INVERTED + s not in small})
+    return Scaling(out, {b: _why(b, real, partials, inverters, out, peaks, machine) for b in free if out[b] != 1.0})
+
+
+def _partials_joined(peaks: Mapping[str, BlockPeak], partials: Mapping[str, frozenset[str]]) -> dict[str, BlockPeak]:
+    """The peaks with each partial sum that keeps its block's scale (not among ``partials``) counted
+    among its block's amplifiers: it moves with the block."""
+    out = dict(peaks)
+    for key, p in peaks.items():
+        b = key.removeprefix(PARTIAL)
+        if key.startswith(PARTIAL) and b not in partials and b in out:
+            out[b] = BlockPeak(out[b].least, max(out[b].most, p.most))
+    return out
+
+
+def _coefficients(real: Realization, partials: Mapping[str, frozenset[str]],
+                  inverters: Mapping[str, frozenset[str]]) -> list[tuple[str, Term]]:
+    """Every coefficient a scaling moves, as (who takes it, the term): a block's own terms (those
+    its partial sum takes are the partial sum's; a sensor it takes through an inverter, the
+    inverter's), each block's entry of its partial sum (at 1), and each sensor's inverter's input
+    (at 1). A differentiator's are not: its input is a sensor and its scale is its T_d, an external part."""
+    out = []
+    for b in real.blocks:
+        if b.kind == "differentiate":
+            continue
+        for t in b.terms:
+            taker = PARTIAL + b.name if t.signal in partials.get(b.name, ()) else b.name
+            through = taker == b.name and b.name in inverters.get(t.signal, ())
+            out.append((taker, replace(t, signal=INVERTED + t.signal) if through else t))
+        if b.name in partials:
+            out.append((b.name, Term(PARTIAL + b.name, 1.0)))
+    out += [(INVERTED + s, Term(s, 1.0)) for s in inverters]
+    return out
+
+
+def _staged(taker: str, term: Term) -> bool:
+    """Whether a coefficient enters or leaves a stage the allocation adds (a partial sum, an
+    inverter): wired straight at 1 when unscaled, it takes a pot when scaled."""
+    return term.signal.startswith(PARTIAL) or taker.startswith(INVERTED)
 
 
 def _consumers(real: Realization) -> dict[str, int]:
@@ -205,7 +272,8 @@ def _straight(term: Term, c: float, weights: tuple[float, ...] | list[float], ma
     return consumers.get(term.signal, 0) == 1 and math.isclose(c, 1.0, rel_tol=1e-12)
 
 
-def _why(name: str, real: Realization, factors: dict[str, float], peaks: Mapping[str, BlockPeak],
+def _why(name: str, real: Realization, partials: Mapping[str, frozenset[str]],
+         inverters: Mapping[str, frozenset[str]], factors: dict[str, float], peaks: Mapping[str, BlockPeak],
          machine: MachineProfile) -> str:
     """The limits block ``name`` reached at its factor, in words."""
     tight = 1e-5
@@ -213,18 +281,15 @@ def _why(name: str, real: Realization, factors: dict[str, float], peaks: Mapping
     if factors[name] * peaks[name].most >= HEADROOM * machine.reference_V * (1 - tight):
         said.append(f"its predicted peak at {100 * HEADROOM:g} % of the reference")
     top_c, floor = max(machine.input_weights) * machine.pot_max, dial_floor(machine)
-    for b in real.blocks:
-        if b.kind == "differentiate":
+    for taker, t in _coefficients(real, partials, inverters):
+        if name not in (taker, t.signal) or taker == t.signal or t.coeff == 0.0:
             continue
-        for t in b.terms:
-            if name not in (b.name, t.signal) or b.name == t.signal or t.coeff == 0.0:
-                continue
-            c = abs(t.coeff) * factors.get(b.name, 1.0) / factors.get(t.signal, 1.0)
-            where = f"{b.name}'s coefficient on {t.signal}"
-            if abs(t.coeff) < top_c and c >= top_c * (1 - tight):
-                said.append(f"{where} at the largest weighted input ({top_c:g})")
-            elif abs(t.coeff) > floor and c <= floor * (1 + tight):
-                said.append(f"{where} at the dial floor ({floor:g})")
+        c = abs(t.coeff) * factors.get(taker, 1.0) / factors.get(t.signal, 1.0)
+        where = f"{taker}'s coefficient on {t.signal}"
+        if abs(t.coeff) < top_c and c >= top_c * (1 - tight):
+            said.append(f"{where} at the largest weighted input ({top_c:g})")
+        elif abs(t.coeff) > floor and c <= floor * (1 + tight):
+            said.append(f"{where} at the dial floor ({floor:g})")
     return "; ".join(said) or "with the least scaled signal's share of the reference"
 
 
@@ -238,20 +303,27 @@ def block_of(quantity: str) -> str:
 
 def block_peaks(real: Realization, amplifiers: Mapping[str, str], peaks_V: Mapping[str, float]) -> dict[str, BlockPeak]:
     """Each block's BlockPeak from its amplifiers' predicted peaks (``amplifiers``: id -> the
-    quantity it carries, as the netlist says; ``peaks_V``: id -> V)."""
+    quantity it carries, as the netlist says; ``peaks_V``: id -> V); a block's partial sum's as
+    "partial <block>", a sensor's inverter's (the one amplifier that carries a sensor) as
+    "inverted <sensor>": each has a scale of its own."""
     names = {b.name for b in real.blocks}
     got: dict[str, list[float]] = {}
     for a, quantity in amplifiers.items():
         b = block_of(quantity)
-        if b in names and a in peaks_V:
-            got.setdefault(b, []).append(peaks_V[a])
+        if a not in peaks_V:
+            continue
+        if b in names:
+            got.setdefault(PARTIAL + b if quantity.startswith(PARTIAL) else b, []).append(peaks_V[a])
+        elif quantity in real.sensors:
+            got.setdefault(INVERTED + quantity, []).append(peaks_V[a])
     return {b: BlockPeak(min(v), max(v)) for b, v in got.items()}
 
 
 def rescaled(real: Realization, scales: Mapping[str, float]) -> Realization:
     """The realisation with each block's voltage multiplied by its factor (the law unchanged):
     its input coefficients times its factor (a differentiator's T_d instead), every coefficient
-    on it divided by it."""
+    on it divided by it; a block's partial sum's ("partial <block>") sets its partial_scale, a
+    sensor's inverter's ("inverted <sensor>") its gain."""
     def alpha(signal: str) -> float:
         return scales.get(signal, 1.0)
 
@@ -266,7 +338,9 @@ def rescaled(real: Realization, scales: Mapping[str, float]) -> Realization:
             blocks.append(replace(b, terms=tuple(term(t, 1.0) for t in b.terms), volts_per_unit=b.volts_per_unit * a,
                                   T_d_s=None if b.T_d_s is None else b.T_d_s * a))
         else:
-            blocks.append(replace(b, terms=tuple(term(t, a) for t in b.terms), volts_per_unit=b.volts_per_unit * a))
-    return replace(real, blocks=tuple(blocks))
+            blocks.append(replace(b, terms=tuple(term(t, a) for t in b.terms), volts_per_unit=b.volts_per_unit * a,
+                                  partial_scale=b.partial_scale * scales.get(PARTIAL + b.name, a) / a))
+    gains = {s: real.inverter_gains.get(s, 1.0) * scales[INVERTED + s] for s in real.sensors if INVERTED + s in scales}
+    return replace(real, blocks=tuple(blocks), inverter_gains={**real.inverter_gains, **gains})
 
 

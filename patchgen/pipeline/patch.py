@@ -72,7 +72,7 @@ def run_patch(inputs: Inputs, plan: PatchPlan = PatchPlan()) -> PatchReport:
         d = design_on(spec, machine, bench)
         # the envelope simulated by the worker, whose simulator started with this command (without one, here)
         scaled = scaled_patch(d, machine, bench, runs_of=None if worker is None else
-                              lambda n: worker.envelope(d, n, machine, bench).result())
+                              lambda n, rails=True: worker.envelope(d, n, machine, bench, rails).result())
         net, runs = scaled.netlist, scaled.runs
         judged = as_patched_on_bench(d, net, machine, bench)
     except BaseException:

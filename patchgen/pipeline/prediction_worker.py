@@ -57,9 +57,10 @@ class PredictionWorker:
                 pass
         self._pool = ThreadPoolExecutor(1, thread_name_prefix="bench-prediction")
 
-    def envelope(self, d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile) -> Future:
+    def envelope(self, d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile,
+                 rails: bool = True) -> Future:
         """The runs a patch's signal-to-noise scaling is taken over (patchgen.pipeline.scaling.envelope_runs)."""
-        return self._pool.submit(envelope_runs, d, net, machine, bench)
+        return self._pool.submit(envelope_runs, d, net, machine, bench, rails)
 
     def predict(self, d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile,
                 runs_hold: int, done: dict | None = None) -> Future[BenchPrediction]:

@@ -81,13 +81,14 @@ def run_recommend(inputs: Inputs, scenarios: Sequence[Scenario], plan: Recommend
     if best is None:
         return RecommendReport(rec, None, None)
     done = reusable_runs(rec, best)
-    scaled = scaled_patch(best.design, machine, bench, best.netlist, runs_of=lambda net: standard_runs(
-        net, best.design.plant, bench, machine, ENVELOPE_RUNS, done=done, bench_spread=bool(bench.uncertainty.ranges)))
+    scaled = scaled_patch(best.design, machine, bench, best.netlist, runs_of=lambda net, rails=True: standard_runs(
+        net, best.design.plant, bench, machine, ENVELOPE_RUNS, done=done if net is best.netlist and rails else None,
+        bench_spread=bool(bench.uncertainty.ranges), rails=rails))
     rescaled = scaled.netlist is not best.netlist
-    if rescaled:  # the chosen patch as patchgen patch gives it (ranked at its sensor
-        best = replace(best, netlist=scaled.netlist)  # constants), so the sheet's prediction is of it, run again
+    if rescaled:  # the chosen patch as patchgen patch gives it (ranked at its sensor constants), so the
+        best = replace(best, netlist=scaled.netlist)  # sheet's prediction is of it, its own runs reused
         rec = replace(rec, ranked=(best, *rec.ranked[1:]))
-        done, corners = {}, None
+        done, corners = dict(scaled.runs or {}), None
     else:
         corners = best.bench_study
     judged = as_patched_on_bench(best.design, best.netlist, machine, bench)

@@ -21,11 +21,13 @@ from patchgen.patch.build import build_patch
 from patchgen.patch.differences import without_differentiators
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.realization import realize
-from patchgen.patch.snr_scaling import Scaling, block_peaks, snr_scales
+from patchgen.patch.snr_scaling import FIXED, HEADROOM, INVERTED, PARTIAL, BlockPeak, Scaling, block_peaks, snr_scales
+from patchgen.patch.static_check import spare_pots
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
 ENVELOPE_RUNS = 8  # seeds of the long hold in the envelope (one run of the others): HEADROOM covers the rest
+ROUNDS = 3  # scalings tried: the programme's, then half of it and a quarter (ln), until the bench agrees
 
 Runs = dict  # scenario name -> list of patchgen.bench.results.RunSummary
 
@@ -46,11 +48,13 @@ def wants_scaling(d: Design) -> bool:
     return p.scaling == "snr" and not (p.realization == "compensator" and d.controller is not None)
 
 
-def envelope_runs(d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile) -> Runs:
-    """The standard scenarios' runs the envelope is taken over (the simulator, loaded here)."""
+def envelope_runs(d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile, rails: bool = True) -> Runs:
+    """The standard scenarios' runs the envelope is taken over (the simulator, loaded here); with
+    ``rails`` False, no amplifier clips."""
     from patchgen.bench.prediction import standard_runs
 
-    return standard_runs(net, d.plant, bench, machine, ENVELOPE_RUNS, bench_spread=bool(bench.uncertainty.ranges))
+    return standard_runs(net, d.plant, bench, machine, ENVELOPE_RUNS, bench_spread=bool(bench.uncertainty.ranges),
+                         rails=rails)
 
 
 def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: Netlist | None = None,
@@ -76,19 +80,98 @@ def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: N
     net = build_patch(d, machine) if net is None else net
     if not wants_scaling(d):
         return ScaledPatch(net, None, None)
-    runs = runs_of(net) if runs_of is not None else envelope_runs(d, net, machine, bench)
+    run = runs_of if runs_of is not None else (lambda n, rails=True: envelope_runs(d, n, machine, bench, rails))
+    runs = run(net)
+    real = without_differentiators(realize(d, machine), machine)  # the blocks build_patch places
+    on_bench = block_peaks(real, _quantities(net), _peaks(runs))
+    # an amplifier clipped at its rails holds the others back, so their peaks say less than the
+    # linear circuit's, which a scaling moves: the envelope is then the patch's with no rails
+    clipped = any(v > machine.imperfections.saturation_V for v in _peaks(runs).values())
+    base = block_peaks(real, _quantities(net), _peaks(run(net, rails=False))) if clipped else on_bench
+    held = _held(runs)
+    why_not = ""
+    # a partial sum or an inverter scaled takes a pot more: without them if it does not fit, or if it
+    # would take the last spare pot (the checks' test voltages come from one) to no overload's cure
+    for parts, inverters in ((partial_sums(net), sensor_inverters(net)), (None, None)):
+        chosen = snr_scales(real, base, machine, parts, inverters)
+        if not chosen.changes:
+            return ScaledPatch(net, chosen, runs)
+        for k in range(ROUNDS):  # the programme's scales, then (ln) half of them, a quarter
+            scaling = chosen if k == 0 else _backed_off(chosen, 0.5 ** k)
+            try:
+                scaled = build_patch(d, machine, scales=scaling.factors)
+            except InputError as exc:  # the scaled law needs what the machine lacks
+                why_not = why_not or f"scaled, the patch does not fit ({exc.message})"
+                break
+            staged = [x for x, f in scaling.factors.items() if f != 1.0 and x.startswith((PARTIAL, INVERTED))]
+            cures = any(base[x].most > HEADROOM * machine.reference_V for x in staged)
+            if staged and not cures and spare_pots(net, machine) and not spare_pots(scaled, machine):
+                why_not = "scaled, they would take the last spare pot, which the checks' test voltages come from"
+                break
+            got = run(scaled)
+            reached = block_peaks(real, _quantities(scaled), _peaks(got))
+            if _within(reached, on_bench, machine) and all(_held(got).get(s, 0.0) >= v for s, v in held.items()):
+                notes = [*scaled.notes, *scaling.notes()]
+                if why_not:
+                    notes.append(f"its partial sums and sensor inverters keep their scale: {why_not}")
+                return ScaledPatch(scaled.model_copy(update={"notes": notes}), scaling, got)
+        else:
+            why_not = why_not or (f"scaled, even to {0.5 ** (ROUNDS - 1):g} of its factors (ln), the patch passed "
+                                  f"the reference or was held less often on the bench")
+    note = f"not scaled for signal-to-noise: {why_not}"  # keep the sensor constants
+    return ScaledPatch(net.model_copy(update={"notes": [*net.notes, note]}), None, runs)
+
+
+def _backed_off(chosen: Scaling, share: float) -> Scaling:
+    """The programme's scaling taken ``share`` of the way (in ln): the bench held the full one less
+    often, or one of its signals passed the reference (a nonlinearity the envelope could not see)."""
+    factors = {x: f ** share for x, f in chosen.factors.items()}
+    said = f"{share:g} of the way (ln) to the scale where {{}}: the full scale was held less often on the bench"
+    return Scaling(factors, {x: said.format(w) for x, w in chosen.why.items()})
+
+
+def _quantities(net: Netlist) -> dict[str, str]:
+    return {a.id: a.carries.quantity for a in net.amplifiers}
+
+
+def _peaks(runs: Runs) -> dict[str, float]:
+    """Each amplifier's largest |output| over every run (V)."""
     peaks: dict[str, float] = {}
     for rs in runs.values():
         for r in rs:
             for a, v in r.amp_peaks_V:
                 peaks[a] = max(peaks.get(a, 0.0), v)
-    real = without_differentiators(realize(d, machine), machine)  # the blocks build_patch places
-    scaling = snr_scales(real, block_peaks(real, {a.id: a.carries.quantity for a in net.amplifiers}, peaks), machine)
-    if not scaling.changes:
-        return ScaledPatch(net, scaling, runs)
-    try:
-        scaled = build_patch(d, machine, scales=scaling.factors)
-    except InputError as exc:  # the scaled law needs what the machine lacks: keep the sensor constants
-        note = f"not scaled for signal-to-noise: the scaled patch does not fit ({exc.message})"
-        return ScaledPatch(net.model_copy(update={"notes": [*net.notes, note]}), None, runs)
-    return ScaledPatch(scaled.model_copy(update={"notes": [*scaled.notes, *scaling.notes()]}), scaling, None)
+    return peaks
+
+
+def _held(runs: Runs) -> dict[str, float]:
+    """The fraction of runs held, by scenario."""
+    return {k: sum(r.held for r in rs) / len(rs) for k, rs in runs.items() if rs}
+
+
+def _within(reached: dict[str, BlockPeak], base: dict[str, BlockPeak], machine: MachineProfile) -> bool:
+    """Whether every signal of the scaled patch stays inside the reference, or no further past it
+    than at the sensor constants (u_c, which the bench fixes, aside: what it asks is the design's)."""
+    return all(p.most <= max(machine.reference_V, base[k].most if k in base else 0.0) * (1 + 1e-9)
+               for k, p in reached.items() if k not in FIXED)
+
+
+def sensor_inverters(net: Netlist) -> dict[str, frozenset[str]]:
+    """For each sensor the patch inverts, the blocks that take it through its inverter."""
+    sensors = {s.id for s in net.sensors}
+    inv = {a.id: a.inputs[0].source for a in net.amplifiers
+           if a.role == "inverter" and len(a.inputs) == 1 and a.inputs[0].source in sensors}
+    out: dict[str, set[str]] = {}
+    for a in net.amplifiers:
+        for i in a.inputs:
+            if i.source in inv:
+                out.setdefault(inv[i.source], set()).add(a.carries.quantity)
+    return {s: frozenset(b) for s, b in out.items()}
+
+
+def partial_sums(net: Netlist) -> dict[str, frozenset[str]]:
+    """For each block with a partial sum (a pre-summer of the terms needing the other sign), the
+    signals that partial sum takes, by the names the realisation gives them."""
+    quantity = {a.id: a.carries.quantity for a in net.amplifiers}
+    return {a.carries.quantity.removeprefix(PARTIAL): frozenset(quantity.get(i.source, i.source) for i in a.inputs)
+            for a in net.amplifiers if a.carries.quantity.startswith(PARTIAL)}

@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from patchgen.inputs.errors import ResourceError
 from patchgen.patch.build import build_patch
 from patchgen.patch.readback import wired_law
 from patchgen.patch.realization import realize
@@ -118,13 +119,56 @@ def test_bench_recommendeds_actuator_state_uses_twice_the_range():
     assert math.isclose(abs(next(t.coeff for t in u_c.terms if t.signal == "actuator")), 3.5201 / 2, rel_tol=1e-3)
 
 
-def test_an_amplifier_belongs_to_its_block_its_partial_sums_and_its_gain_stages():
+def test_an_amplifier_belongs_to_its_block_its_gain_stages_or_a_stage_of_its_own():
+    """A gain stage scales with its block; a partial sum and a sensor's inverter have scales of their own."""
     from patchgen.patch.snr_scaling import block_of, block_peaks
 
     assert [block_of(q) for q in ("actuator", "partial u_c", "theta_x1.42", "xhat_theta_x12", "c2_in")] == \
         ["actuator", "u_c", "theta", "xhat_theta", "c2_in"]
     d, _ = design_from_path(design_path("bench-recommended"))
     real = realize(d, load_machine("gp6"))
-    got = block_peaks(real, {"A1": "actuator", "A5": "theta_dot", "A6": "u_c", "A7": "partial u_c", "A9": "theta_x2"},
-                      {"A1": 1.0, "A5": 4.0, "A6": 6.0, "A7": 7.0, "A9": 9.0})
-    assert got == {"actuator": BlockPeak(1.0, 1.0), "theta_dot": BlockPeak(4.0, 4.0), "u_c": BlockPeak(6.0, 7.0)}
+    got = block_peaks(real, {"A1": "actuator", "A5": "theta_dot", "A6": "u_c", "A7": "partial u_c", "A9": "theta_x2",
+                             "A2": "s", "A3": "theta_dot_x10"},
+                      {"A1": 1.0, "A5": 4.0, "A6": 6.0, "A7": 7.0, "A9": 9.0, "A2": 2.0, "A3": 8.0})
+    assert got == {"actuator": BlockPeak(1.0, 1.0), "theta_dot": BlockPeak(4.0, 8.0), "u_c": BlockPeak(6.0, 6.0),
+                   "partial u_c": BlockPeak(7.0, 7.0), "inverted s": BlockPeak(2.0, 2.0)}
+
+
+def test_a_partial_sum_and_a_sensors_inverter_take_scales_of_their_own(case):
+    """The stages the allocation adds: a partial sum past the reference comes down towards
+    HEADROOM and a sensor's inverter at 5 % rises, each on a pot of its own, the law read back unchanged
+    (within the dial's steps) and each stage's amplifier carrying its signal at its new scale."""
+    from patchgen.patch.snr_scaling import INVERTED, PARTIAL, block_peaks
+    from patchgen.pipeline.scaling import partial_sums, sensor_inverters
+
+    d, m, real = case
+    plain = build_patch(d, m)
+    parts, inverters = partial_sums(plain), sensor_inverters(plain)
+    if not parts and not inverters:
+        pytest.skip("this patch has neither a partial sum nor a sensor's inverter")
+    ref = m.reference_V
+    volts = {a.id: (1.5 if a.carries.quantity.startswith(PARTIAL) else 0.05 if a.role == "inverter" else 0.5) * ref
+             for a in plain.amplifiers}
+    peaks = block_peaks(real, {a.id: a.carries.quantity for a in plain.amplifiers}, volts)
+    scaling = snr_scales(real, peaks, m, parts, inverters)
+    alpha = scaling.factors
+    for b in parts:  # down to HEADROOM, or as far as a coefficient's dial floor lets it (bench-recommended's s)
+        p = PARTIAL + b
+        assert alpha[p] < 1.0 and (alpha[p] * peaks[p].most == pytest.approx(HEADROOM * ref, rel=1e-5)
+                                   or "dial floor" in scaling.why[p]), (b, scaling.why[p])
+    for s in inverters:
+        assert alpha[INVERTED + s] >= 2.0, s  # raised, as the worst signal at 5 %
+    try:
+        scaled = build_patch(d, m, scales=alpha)
+    except ResourceError as exc:  # each stage scaled takes a pot: two of them are more than THAT's 8
+        assert (d.spec.name, m.id) == ("bench-recommended", "the-analog-thing") and "pots" in exc.message
+        return
+    g0, g1 = wired_law(plain).freqresp(W), wired_law(scaled).freqresp(W)
+    assert np.abs(g1 - g0).max() <= 0.01 * np.abs(g0).max()
+    for a in scaled.amplifiers:
+        q = a.carries.quantity
+        if q.startswith(PARTIAL):
+            block = real.block(q.removeprefix(PARTIAL))
+            assert a.carries.volts_per_unit == pytest.approx(block.volts_per_unit * alpha[q], rel=1e-9)
+        elif a.role == "inverter" and q in real.sensors:
+            assert a.carries.volts_per_unit == pytest.approx(real.sensors[q] * alpha[INVERTED + q], rel=1e-9)

@@ -11,7 +11,7 @@ from patchgen.patch import compensator_fit, differences
 from patchgen.patch.allocation import allocate
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.parts import parts_for
-from patchgen.patch.realization import realize
+from patchgen.patch.realization import Realization, realize
 from patchgen.patch.snr_scaling import rescaled
 from patchgen.profiles.machine import MachineProfile, the_machine
 
@@ -30,14 +30,37 @@ def build_patch(design: Design, machine: MachineProfile, units: int | str | None
     that judges the error, not a user, need not pay for the search): :func:`fitting_change`.
 
     ``scales`` multiplies each named block's voltage, the law unchanged
-    (patchgen.patch.snr_scaling.snr_scales chooses them for signal-to-noise; the law as its states only)."""
+    (patchgen.patch.snr_scaling.snr_scales chooses them for signal-to-noise): :func:`scaled_placed`
+    on the realisation placed."""
+    net, real = placed(design, machine, units, suggest)
+    return scaled_placed(design, machine, net, real, scales) if scales else net
+
+
+def placed(design: Design, machine: MachineProfile, units: int | str | None = None,
+           suggest: bool = True) -> tuple[Netlist, Realization]:
+    """:func:`build_patch`'s patch and the realisation it placed: the law as its states (its
+    differentiators built from lags on a machine without them), or the compensator's realisation
+    chosen (patchgen.patch.compensator_fit), which a scaling for signal-to-noise rescales."""
     try:
-        return _build(design, machine, units, scales)
+        return _build(design, machine, units)
     except ResourceError as exc:
         cure = fitting_change(design, machine) if units is None and suggest else None
         if cure is None:
             raise
         raise ResourceError(exc.source, exc.field, exc.message, cure) from None
+
+
+def scaled_placed(design: Design, machine: MachineProfile, net: Netlist, real: Realization,
+                  scales: Mapping[str, float]) -> Netlist:
+    """``net``, placed from ``real``, with each block's voltage multiplied by its factor
+    (patchgen.patch.snr_scaling.rescaled): placed again on as many units, with the notes the
+    placement added beyond the allocator's (a compensator's realisations compared)."""
+    plain = allocate(real, machine.slaved(net.units), design.spec.path)
+    extra = net.notes[len(plain.notes):] if net.notes[:len(plain.notes)] == plain.notes else []
+    scaled = rescaled(real, scales)
+    _check_law_reaches_pots(scaled, machine, design.spec)
+    out = _place(design, scaled, machine, net.units)
+    return out.model_copy(update={"notes": [*out.notes, *extra]})
 
 
 def fitting_change(design: Design, machine: MachineProfile) -> Cure | None:
@@ -57,7 +80,7 @@ def fitting_change(design: Design, machine: MachineProfile) -> Cure | None:
         tries.append(("patch.realization", other, "fits it"))
     for field, value, gives in tries:
         try:
-            net = _build(replace(design, spec=spec.changed(field, value)), machine, None)
+            net = _build(replace(design, spec=spec.changed(field, value)), machine, None)[0]
         except InputError:  # it does not fit, or that realisation refuses the law for its own reason
             continue
         if field == "patch.realization":
@@ -66,9 +89,8 @@ def fitting_change(design: Design, machine: MachineProfile) -> Cure | None:
     return None
 
 
-def _build(design: Design, machine: MachineProfile, units: int | str | None,
-           scales: Mapping[str, float] | None = None) -> Netlist:
-    """build_patch without a suggestion."""
+def _build(design: Design, machine: MachineProfile, units: int | str | None) -> tuple[Netlist, Realization]:
+    """:func:`placed` without a suggestion."""
     spec = design.spec
     units = spec.patch.units if units is None else units
     cap = spec.patch.max_units or machine.max_units
@@ -76,19 +98,17 @@ def _build(design: Design, machine: MachineProfile, units: int | str | None,
     if spec.patch.realization == "compensator" and design.controller is not None:
         return _place_compensator(design, machine, tries)  # plain state feedback has no other form
     real = differences.without_differentiators(realize(design, machine), machine)
-    if scales:
-        real = rescaled(real, scales)
     _check_law_reaches_pots(real, machine, spec)
     for n in tries:
         try:
-            return _place(design, real, machine, n)
+            return _place(design, real, machine, n), real
         except ResourceError:
             if n == tries[-1]:
                 raise
     raise AssertionError("unreachable")
 
 
-def _place_compensator(design: Design, machine: MachineProfile, tries: list[int]) -> Netlist:
+def _place_compensator(design: Design, machine: MachineProfile, tries: list[int]) -> tuple[Netlist, Realization]:
     """The compensator at the spec's order and form on the fewest of ``tries`` units that takes it."""
     spec = design.spec
     p = spec.patch
@@ -106,7 +126,7 @@ def _place_compensator(design: Design, machine: MachineProfile, tries: list[int]
     net = chosen.netlist
     notes = list(net.notes) + [f"realisation compared: {f.line()}" for f in tried] + _choice_notes(chosen, design)
     net = net.model_copy(update={"description": spec.description, "notes": notes})
-    return net.model_copy(update={"parts": parts_for(net, machine)})
+    return net.model_copy(update={"parts": parts_for(net, machine)}), chosen.real
 
 
 def _choice_notes(chosen: compensator_fit.Fit, design: Design) -> list[str]:

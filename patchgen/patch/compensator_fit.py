@@ -38,6 +38,7 @@ from patchgen.patch.compensator_forms import (
 )
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import si_controller, wired_law
+from patchgen.patch.realization import Realization
 from patchgen.profiles.machine import MachineProfile
 
 METHODS = ("truncate", "residualise")
@@ -65,6 +66,7 @@ class Fit:
     peak_fraction: float = 0.0  # the largest amplifier's peak over the scaling excursions / reference
     dialled_margins: Margins | None = field(default=None, compare=False)
     staged: bool = False  # blocks with coefficients above one input summed at 1/g first (compensator_forms)
+    real: Realization | None = field(default=None, compare=False, repr=False)  # the realisation placed
 
     @property
     def units(self) -> int | None:
@@ -270,7 +272,7 @@ def _place_scaled(design: Design, order: int, method: str, law: comp.Compensator
     peak = max(peaks.values()) / machine.reference_V
     if got.margins is None:
         got.margins = dialled_margins(design, net)
-    return Fit(order, method, form, law, dm, net, None, rng, peak, got.margins, staged)
+    return Fit(order, method, form, law, dm, net, None, rng, peak, got.margins, staged, real)
 
 
 def fits(design: Design, machine: MachineProfile, units: list[int], form: str = "auto",

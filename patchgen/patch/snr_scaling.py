@@ -20,7 +20,8 @@ ASPLOS 2020), is an optimisation, here a pair of linear programmes in y = ln alp
 a partial sum (a pre-summer of a block's terms of the other sign) and a sensor's inverter, stages
 the allocation adds, have scales of their own too, each costing a pot where it was wired straight:
 they move where the worst signal (stage 1) or an overload needs it, stage 2 prices them
-(STAGE_COST), and one within HEADROOM that would gain less than STAGE_WORTH keeps its scale;
+(STAGE_COST), and one within HEADROOM that would gain less than STAGE_WORTH keeps its scale, as
+does a block that would gain less than SCALE_WORTH;
 
 subject to
 
@@ -59,6 +60,9 @@ INVERTED = "inverted "  # a sensor's inverter (the netlist: an inverter carrying
 STAGE_COST = 1e-3  # stage 2's price of scaling a partial sum or an inverter (a pot more): only where the worst
 # signal (stage 1) or an overload needs it
 STAGE_WORTH = 2.0  # a stage within HEADROOM is scaled only if that raises it this much (6 dB): else not worth a pot
+SCALE_WORTH = 1.25  # a block within HEADROOM is scaled only if that raises it this much (2 dB): else not worth
+# re-dialling its pots, and moving the law's own errors (thesis-case2's compensator on the GP-6, every block
+# 1.15 times: the op-amps' finite gain then moves the loop 1.07 % from the ideal, against 0.86 %)
 INSIDE = 1e-6  # relative: every limit is kept this far inside, so a coefficient at a limit stays within it
 STAGE_ONE_SLACK = 1e-9  # relative: stage 2 keeps stage 1's optimum to this (the solver's tolerance)
 
@@ -104,7 +108,8 @@ def dial_limits(setting: float, resolution: float) -> bool:
 
 def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: MachineProfile,
                partials: Mapping[str, frozenset[str]] | None = None,
-               inverters: Mapping[str, frozenset[str]] | None = None) -> Scaling:
+               inverters: Mapping[str, frozenset[str]] | None = None,
+               kept: frozenset[str] | set[str] = frozenset()) -> Scaling:
     """The factor each block's voltage is multiplied by (1: kept), see the module docstring.
 
     Parameters
@@ -124,6 +129,8 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
         For a sensor the allocation inverts, the blocks that take it through its inverter; with
         the inverter's peak in ``peaks`` as "inverted <sensor>", the inverter gets a gain of its own
         (its consumers take it at the inverse): "inverted <sensor>" in the factors.
+    kept : set of str, optional
+        Blocks kept at their scale (what a scaling that gained them too little leaves).
 
     Returns
     -------
@@ -139,7 +146,8 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
     peaks = _partials_joined(peaks, partials)
     inverters = {s: b for s, b in (inverters or {}).items()
                  if s in real.sensors and peaks.get(INVERTED + s, BlockPeak(0, 0)).least > 0}
-    free = [b.name for b in real.blocks if b.name not in FIXED and peaks.get(b.name, BlockPeak(0, 0)).least > 0]
+    free = [b.name for b in real.blocks
+            if b.name not in FIXED and b.name not in kept and peaks.get(b.name, BlockPeak(0, 0)).least > 0]
     free += [PARTIAL + b for b in partials]  # a partial sum's own scale (its voltage over the sensor constants')
     free += [INVERTED + s for s in inverters]  # a sensor's inverter's gain
     out = {b.name: 1.0 for b in real.blocks} | {x: 1.0 for x in free}
@@ -203,11 +211,11 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
     y = second.x[:n]
     for name, v in zip(free, y):
         out[name] = math.exp(v)
-    small = {x for x in free if x.startswith((PARTIAL, INVERTED)) and 1.0 < out[x] < STAGE_WORTH
+    small = {x for x in free if 1.0 < out[x] < (STAGE_WORTH if x.startswith((PARTIAL, INVERTED)) else SCALE_WORTH)
              and peaks[x].most <= HEADROOM * ref}
-    if small:  # not worth a pot: those stages stay as they were, and the others are chosen again
+    if small:  # not worth re-dialling (or a pot more): those stay as they were, and the others are chosen again
         return snr_scales(real, peaks, machine, {b: s for b, s in partials.items() if PARTIAL + b not in small},
-                          {s: b for s, b in inverters.items() if INVERTED + s not in small})
+                          {s: b for s, b in inverters.items() if INVERTED + s not in small}, kept | small)
     return Scaling(out, {b: _why(b, real, partials, inverters, out, peaks, machine) for b in free if out[b] != 1.0})
 
 

@@ -1,15 +1,17 @@
 """The patch every command patches, simulates and checks: the spec's law scaled into volts by its
-sensor constants, then (``[patch] scaling = "snr"``, the default, the law as its states) each
+sensor constants (the law as its states, or a compensator's realisation with its states at half
+the reference over the design's excursions), then (``[patch] scaling = "snr"``, the default) each
 internal signal raised as far as the bench lets it (patchgen.patch.snr_scaling).
 
 How far a signal may go is what the bench Monte Carlo of the standard scenarios shows it reaching
-with the sensor-constant scales (the envelope): the runs the sheet's prediction makes
+at those scales (the envelope): the runs the sheet's prediction makes
 (patchgen.bench.prediction.standard_runs), with ENVELOPE_RUNS seeds of the long hold whatever a
 command's own run count, so that every command builds the same patch from the same spec, machine
-and bench. The scaling is linear, so a signal's peak moves with its scale; the prediction of the
-scaled patch checks it.
+and bench; taken with no rails when an amplifier clipped (a clip holds the others back). The
+scaling is linear, so a signal's peak moves with its scale; the scaled patch is simulated on the
+bench and kept only if its signals stay inside the reference and it is held as often (else
+ROUNDS tries nearer the sensor constants), and those runs stand in for the prediction's.
 """
-
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -17,10 +19,8 @@ from dataclasses import dataclass
 
 from patchgen.design.lqg import Design
 from patchgen.inputs.errors import InputError
-from patchgen.patch.build import build_patch
-from patchgen.patch.differences import without_differentiators
+from patchgen.patch.build import build_patch, placed, scaled_placed
 from patchgen.patch.netlist import Netlist
-from patchgen.patch.realization import realize
 from patchgen.patch.snr_scaling import FIXED, HEADROOM, INVERTED, PARTIAL, BlockPeak, Scaling, block_peaks, snr_scales
 from patchgen.patch.static_check import spare_pots
 from patchgen.profiles.bench import BenchProfile
@@ -43,9 +43,9 @@ class ScaledPatch:
 
 
 def wants_scaling(d: Design) -> bool:
-    """Whether the spec asks for signal-to-noise scaling of a law it places as its states."""
-    p = d.spec.patch
-    return p.scaling == "snr" and not (p.realization == "compensator" and d.controller is not None)
+    """Whether the spec asks for signal-to-noise scaling (the law as its states, or as one
+    compensator: its realisation's states and sums)."""
+    return d.spec.patch.scaling == "snr"
 
 
 def envelope_runs(d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile, rails: bool = True) -> Runs:
@@ -77,17 +77,22 @@ def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: N
     -------
     ScaledPatch
     """
-    net = build_patch(d, machine) if net is None else net
     if not wants_scaling(d):
-        return ScaledPatch(net, None, None)
+        return ScaledPatch(build_patch(d, machine) if net is None else net, None, None)
+    given = net
+    net, real = placed(d, machine)  # the realisation placed: the law's blocks, or the compensator's chosen
+    net = net if given is None else given
     run = runs_of if runs_of is not None else (lambda n, rails=True: envelope_runs(d, n, machine, bench, rails))
     runs = run(net)
-    real = without_differentiators(realize(d, machine), machine)  # the blocks build_patch places
+    if not _peaks(runs):  # a pendulum that falls or runs to the switches: its signals are no envelope
+        note = ("not scaled for signal-to-noise: no run on the bench held the pendulum, whose signals would be "
+                "the envelope")
+        return ScaledPatch(net.model_copy(update={"notes": [*net.notes, note]}), None, runs)
     on_bench = block_peaks(real, _quantities(net), _peaks(runs))
     # an amplifier clipped at its rails holds the others back, so their peaks say less than the
     # linear circuit's, which a scaling moves: the envelope is then the patch's with no rails
     clipped = any(v > machine.imperfections.saturation_V for v in _peaks(runs).values())
-    base = block_peaks(real, _quantities(net), _peaks(run(net, rails=False))) if clipped else on_bench
+    base = block_peaks(real, _quantities(net), _peaks(run(net, rails=False)) or _peaks(runs)) if clipped else on_bench
     held = _held(runs)
     why_not = ""
     # a partial sum or an inverter scaled takes a pot more: without them if it does not fit, or if it
@@ -99,7 +104,7 @@ def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: N
         for k in range(ROUNDS):  # the programme's scales, then (ln) half of them, a quarter
             scaling = chosen if k == 0 else _backed_off(chosen, 0.5 ** k)
             try:
-                scaled = build_patch(d, machine, scales=scaling.factors)
+                scaled = scaled_placed(d, machine, net, real, scaling.factors)
             except InputError as exc:  # the scaled law needs what the machine lacks
                 why_not = why_not or f"scaled, the patch does not fit ({exc.message})"
                 break
@@ -135,10 +140,13 @@ def _quantities(net: Netlist) -> dict[str, str]:
 
 
 def _peaks(runs: Runs) -> dict[str, float]:
-    """Each amplifier's largest |output| over every run (V)."""
+    """Each amplifier's largest |output| over every run that held the pendulum (V): a run that
+    falls, or runs to the switches, swings its signals as no patch is scaled for."""
     peaks: dict[str, float] = {}
     for rs in runs.values():
         for r in rs:
+            if not r.held:
+                continue
             for a, v in r.amp_peaks_V:
                 peaks[a] = max(peaks.get(a, 0.0), v)
     return peaks

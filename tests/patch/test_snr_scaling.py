@@ -14,7 +14,7 @@ from patchgen.inputs.errors import ResourceError
 from patchgen.patch.build import build_patch
 from patchgen.patch.readback import wired_law
 from patchgen.patch.realization import realize
-from patchgen.patch.snr_scaling import FIXED, HEADROOM, BlockPeak, dial_floor, rescaled, snr_scales
+from patchgen.patch.snr_scaling import FIXED, HEADROOM, SCALE_WORTH, BlockPeak, dial_floor, rescaled, snr_scales
 from patchgen.profiles.machine import load_machine
 from tests.conftest import design_from_path, design_path
 
@@ -56,11 +56,13 @@ def _limits_hold(real, scaled, alpha, peaks, m):
 
 
 def _no_block_can_grow(real, alpha, peaks, m):
-    """Stage 2's optimum, from outside: each free block 0.01 % larger passes some limit."""
+    """Stage 2's optimum, from outside: each block scaled up is at least SCALE_WORTH larger (less
+    is not worth re-dialling: it keeps its scale), and 0.01 % more passes some limit."""
     for name, a in alpha.items():
         p = peaks.get(name, BlockPeak(0, 0))
-        if name in FIXED or p.least <= 0 or p.most > HEADROOM * m.reference_V:
+        if name in FIXED or p.least <= 0 or p.most > HEADROOM * m.reference_V or a == 1.0:
             continue
+        assert a >= SCALE_WORTH * (1 - 1e-9), (name, a)
         bigger = {**alpha, name: a * 1.0001}
         with pytest.raises(AssertionError):
             _limits_hold(real, rescaled(real, bigger), bigger, peaks, m)

@@ -13,7 +13,7 @@ from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
 from patchgen.pipeline.prediction import HOLD_RUNS, BenchPrediction
 from patchgen.pipeline.prediction_worker import PredictionWorker
-from patchgen.pipeline.scaling import scaled_patch
+from patchgen.pipeline.scaling import ENVELOPE_RUNS, scaled_patch
 
 
 @dataclass(frozen=True)
@@ -72,7 +72,8 @@ def run_patch(inputs: Inputs, plan: PatchPlan = PatchPlan()) -> PatchReport:
         d = design_on(spec, machine, bench)
         # the envelope simulated by the worker, whose simulator started with this command (without one, here)
         scaled = scaled_patch(d, machine, bench, runs_of=None if worker is None else
-                              lambda n, rails=True: worker.envelope(d, n, machine, bench, rails).result())
+                              lambda n, rails=True, hold=ENVELOPE_RUNS: worker.envelope(d, n, machine, bench, rails,
+                                                                                       hold).result())
         net, runs = scaled.netlist, scaled.runs
         judged = as_patched_on_bench(d, net, machine, bench)
     except BaseException:

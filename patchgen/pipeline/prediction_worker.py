@@ -24,7 +24,7 @@ from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPool
 from patchgen.design.lqg import Design
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.prediction import BenchPrediction, predict_on_bench
-from patchgen.pipeline.scaling import envelope_runs
+from patchgen.pipeline.scaling import ENVELOPE_RUNS, envelope_runs
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
@@ -58,9 +58,9 @@ class PredictionWorker:
         self._pool = ThreadPoolExecutor(1, thread_name_prefix="bench-prediction")
 
     def envelope(self, d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile,
-                 rails: bool = True) -> Future:
+                 rails: bool = True, hold: int = ENVELOPE_RUNS) -> Future:
         """The runs a patch's signal-to-noise scaling is taken over (patchgen.pipeline.scaling.envelope_runs)."""
-        return self._pool.submit(envelope_runs, d, net, machine, bench, rails)
+        return self._pool.submit(envelope_runs, d, net, machine, bench, rails, hold)
 
     def predict(self, d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile,
                 runs_hold: int, done: dict | None = None) -> Future[BenchPrediction]:

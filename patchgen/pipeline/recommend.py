@@ -81,8 +81,9 @@ def run_recommend(inputs: Inputs, scenarios: Sequence[Scenario], plan: Recommend
     if best is None:
         return RecommendReport(rec, None, None)
     done = reusable_runs(rec, best)
-    scaled = scaled_patch(best.design, machine, bench, best.netlist, runs_of=lambda net, rails=True: standard_runs(
-        net, best.design.plant, bench, machine, ENVELOPE_RUNS, done=done if net is best.netlist and rails else None,
+    scaled = scaled_patch(best.design, machine, bench, best.netlist, runs_of=lambda net, rails=True,
+                          hold=ENVELOPE_RUNS: standard_runs(
+        net, best.design.plant, bench, machine, hold, done=done if net is best.netlist and rails else None,
         bench_spread=bool(bench.uncertainty.ranges), rails=rails))
     rescaled = scaled.netlist is not best.netlist
     if rescaled:  # the chosen patch as patchgen patch gives it (ranked at its sensor constants), so the

@@ -14,6 +14,8 @@ ROUNDS tries nearer the sensor constants), and those runs stand in for the predi
 """
 from __future__ import annotations
 
+import importlib
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -28,6 +30,8 @@ from patchgen.profiles.machine import MachineProfile
 
 ENVELOPE_RUNS = 8  # seeds of the long hold in the envelope (one run of the others): HEADROOM covers the rest
 ROUNDS = 3  # scalings tried: the programme's, then half of it and a quarter (ln), until the bench agrees
+CHECK_RUNS = 1  # seeds of the long hold a scaled patch is checked on (one run of the others: a clip or a fall
+# shows in the transients; the prediction runs the rest)
 
 Runs = dict  # scenario name -> list of patchgen.bench.results.RunSummary
 
@@ -48,12 +52,13 @@ def wants_scaling(d: Design) -> bool:
     return d.spec.patch.scaling == "snr"
 
 
-def envelope_runs(d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile, rails: bool = True) -> Runs:
-    """The standard scenarios' runs the envelope is taken over (the simulator, loaded here); with
-    ``rails`` False, no amplifier clips."""
+def envelope_runs(d: Design, net: Netlist, machine: MachineProfile, bench: BenchProfile, rails: bool = True,
+                  hold: int = ENVELOPE_RUNS) -> Runs:
+    """The standard scenarios' runs the envelope is taken over, ``hold`` seeds of the long hold
+    (the simulator, loaded here); with ``rails`` False, no amplifier clips."""
     from patchgen.bench.prediction import standard_runs
 
-    return standard_runs(net, d.plant, bench, machine, ENVELOPE_RUNS, bench_spread=bool(bench.uncertainty.ranges),
+    return standard_runs(net, d.plant, bench, machine, hold, bench_spread=bool(bench.uncertainty.ranges),
                          rails=rails)
 
 
@@ -82,8 +87,12 @@ def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: N
     given = net
     net, real = placed(d, machine)  # the realisation placed: the law's blocks, or the compensator's chosen
     net = net if given is None else given
-    run = runs_of if runs_of is not None else (lambda n, rails=True: envelope_runs(d, n, machine, bench, rails))
+    run = runs_of if runs_of is not None else (lambda n, rails=True, hold=ENVELOPE_RUNS: envelope_runs(
+        d, n, machine, bench, rails, hold))
+    loading = threading.Thread(target=importlib.import_module, args=("scipy.optimize",), daemon=True)
+    loading.start()  # the programme's solver loads while the envelope's runs are made (0.1 s)
     runs = run(net)
+    loading.join()
     if not _peaks(runs):  # a pendulum that falls or runs to the switches: its signals are no envelope
         note = ("not scaled for signal-to-noise: no run on the bench held the pendulum, whose signals would be "
                 "the envelope")
@@ -92,15 +101,18 @@ def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: N
     # an amplifier clipped at its rails holds the others back, so their peaks say less than the
     # linear circuit's, which a scaling moves: the envelope is then the patch's with no rails
     clipped = any(v > machine.imperfections.saturation_V for v in _peaks(runs).values())
+    linear = not clipped and all(r.held for rs in runs.values() for r in rs)
+    if clipped and not (first := snr_scales(real, on_bench, machine, partial_sums(net), sensor_inverters(net))).changes:
+        return ScaledPatch(net, first, runs)  # nothing moves on the bench's own peaks: nor with no rails, higher
     base = block_peaks(real, _quantities(net), _peaks(run(net, rails=False)) or _peaks(runs)) if clipped else on_bench
-    held = _held(runs)
     why_not = ""
     # a partial sum or an inverter scaled takes a pot more: without them if it does not fit, or if it
     # would take the last spare pot (the checks' test voltages come from one) to no overload's cure
     for parts, inverters in ((partial_sums(net), sensor_inverters(net)), (None, None)):
         chosen = snr_scales(real, base, machine, parts, inverters)
         if not chosen.changes:
-            return ScaledPatch(net, chosen, runs)
+            said = [f"not scaled for signal-to-noise: {why_not}"] if why_not else []
+            return ScaledPatch(net.model_copy(update={"notes": [*net.notes, *said]}), chosen, runs)
         for k in range(ROUNDS):  # the programme's scales, then (ln) half of them, a quarter
             scaling = chosen if k == 0 else _backed_off(chosen, 0.5 ** k)
             try:
@@ -113,18 +125,26 @@ def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: N
             if staged and not cures and spare_pots(net, machine) and not spare_pots(scaled, machine):
                 why_not = "scaled, they would take the last spare pot, which the checks' test voltages come from"
                 break
-            got = run(scaled)
+            if linear:  # no clip and no fall: the scaled circuit is the same circuit, its signals scaled
+                return _kept(scaled, scaling, why_not, None)
+            got = run(scaled, hold=CHECK_RUNS)
             reached = block_peaks(real, _quantities(scaled), _peaks(got))
-            if _within(reached, on_bench, machine) and all(_held(got).get(s, 0.0) >= v for s, v in held.items()):
-                notes = [*scaled.notes, *scaling.notes()]
-                if why_not:
-                    notes.append(f"its partial sums and sensor inverters keep their scale: {why_not}")
-                return ScaledPatch(scaled.model_copy(update={"notes": notes}), scaling, got)
+            first = _held({name: rs[:CHECK_RUNS] for name, rs in runs.items()})
+            if _within(reached, on_bench, machine) and all(_held(got).get(s, 0.0) >= v for s, v in first.items()):
+                return _kept(scaled, scaling, why_not, got)
         else:
             why_not = why_not or (f"scaled, even to {0.5 ** (ROUNDS - 1):g} of its factors (ln), the patch passed "
                                   f"the reference or was held less often on the bench")
     note = f"not scaled for signal-to-noise: {why_not}"  # keep the sensor constants
     return ScaledPatch(net.model_copy(update={"notes": [*net.notes, note]}), None, runs)
+
+
+def _kept(scaled: Netlist, scaling: Scaling, why_not: str, runs: Runs | None) -> ScaledPatch:
+    """The scaled patch, its notes saying each signal's scale and why a stage kept its own."""
+    notes = [*scaled.notes, *scaling.notes()]
+    if why_not:
+        notes.append(f"its partial sums and sensor inverters keep their scale: {why_not}")
+    return ScaledPatch(scaled.model_copy(update={"notes": notes}), scaling, runs)
 
 
 def _backed_off(chosen: Scaling, share: float) -> Scaling:

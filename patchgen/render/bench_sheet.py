@@ -59,20 +59,27 @@ def bench_section(pred: BenchPrediction, d: Design, machine: MachineProfile, ben
 LOW_SHARE = 0.1  # an amplifier whose expected peak is under this share of the reference is marked low
 
 
+LIMITED = "the actuator's limit"  # a command past the reference that the actuator saturates first
+
+
 def levels_section(pred: BenchPrediction, net: Netlist) -> SheetSection:
     """'Signal levels on the bench': each amplifier's expected peak (the largest |output| over the
     prediction's runs) as a share of the reference, and its signal-to-noise ratio over the
     machine's noise floor; a signal under LOW_SHARE of the reference is marked."""
+    overloaded = {a for p in pred.predictions for a in p.overloads.split(", ")}
     rows = [[lv.amplifier, lv.quantity, f"{100 * lv.peak_share:.1f} %",
              "-" if lv.snr_dB == float("inf") else f"{lv.snr_dB:.0f}",
-             "low" if lv.peak_share < LOW_SHARE else ("past the reference" if lv.peak_share > 1 else "")]
+             "low" if lv.peak_share < LOW_SHARE else "" if lv.peak_share <= 1 else
+             "past the reference" if lv.amplifier in overloaded else LIMITED]
             for lv in pred.levels]
     note = (f"The largest |output| of each amplifier over every run above while the pendulum is up (a run "
             f"that falls: up to its fall), as a share of the reference "
             f"(+/-{net.reference_V:g} V), and over the machine's noise floor (its amplifier noise and "
             f"integrator offset together). A signal that uses little of its range carries the machine's "
             f"noise, offsets and the settings' step at that much more weight; 'low' marks one under "
-            f"{100 * LOW_SHARE:g} %.")
+            f"{100 * LOW_SHARE:g} %." + (" The command past the reference where the actuator saturates first is "
+                                          "the actuator's limit, not an overload (it asks no less than the "
+                                          "actuator gives)." if any(r[-1] == LIMITED for r in rows) else ""))
     return SheetSection("Signal levels on the bench", ["amplifier", "carries", "expected peak", "SNR (dB)", ""],
                         rows, note)
 

@@ -22,6 +22,7 @@ from patchgen.bench.configure import engine_config
 from patchgen.bench.noise_drift import noise_and_drift
 from patchgen.bench.simulate import simulate
 from patchgen.design.lqg import Design, design_on
+from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
@@ -121,6 +122,10 @@ def spice_job(inputs: Inputs, scenario: Scenario, plan: SpicePlan) -> SpiceJob:
     """Design and patch the spec, and write its deck for the scenario (SPICE settings from the
     profiles or, ideal, with noise and drift off and the actuator a pure gain)."""
     spec, machine, bench = inputs
+    if machine.programmed:  # its elements are not op-amps with resistors and capacitors a deck could model
+        raise InputError(spec.path, "machine", f"{machine.name} is programmed, not patched: its profile's "
+                         "[components] are placeholders and no SPICE deck models it; patchgen export writes the "
+                         "configuration it loads, which its client's simulator checks")
     d = design_on(spec, machine, bench)
     net = scaled_patch(d, machine, bench).netlist
     plant = d.plant

@@ -148,3 +148,13 @@ def test_the_summary_names_the_scenarios_own_fall_angle(tmp_path):
             env={"COLUMNS": "200"})
     assert r.returncode == 0, r.stderr
     assert "fallen past 12.5 deg" in r.stdout and "30 deg" not in r.stdout
+
+
+def test_spice_refuses_a_programmed_machine_in_one_line(tmp_path):
+    """The LUCIDAC's profile has placeholder components: no deck models it, and spice says so
+    before it designs anything, writing nothing."""
+    r = run("spice", "bench-recommended", "--machine", "lucidac", "--scenario", "offset-10deg", "--ideal", "-o",
+            str(tmp_path / "o"))
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+    assert "machine: LUCIDAC is programmed, not patched" in r.stderr and "patchgen export" in r.stderr
+    assert not (tmp_path / "o").exists()

@@ -136,8 +136,22 @@ def spice_job(inputs: Inputs, scenario: Scenario, plan: SpicePlan) -> SpiceJob:
                              x0=tuple(scenario.initial.vector()), noise_and_drift=levels,
                              actuator="ideal" if plan.ideal else "bench", seed=scenario.seed,
                              disturbances=tuple(scenario.on_pendulum(plant).disturbances), **noisy)
-    return SpiceJob(d, net, plant, bench, machine, scenario, plan, spice_deck(net, plant, bench, machine, settings),
-                    settings)
+    deck = spice_deck(_settled(net, plant, bench, machine, scenario), plant, bench, machine, settings)
+    return SpiceJob(d, net, plant, bench, machine, scenario, plan, deck, settings)
+
+
+def _settled(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
+             scenario: Scenario) -> Netlist:
+    """The netlist with each integrator that starts settled on its input (no IC: the lag of a
+    difference) given, as its IC, the value patchgen's simulator settles it at for this scenario's
+    start: a deck's operating point holds an IC, it does not settle one."""
+    settling = [a.id for a in net.amplifiers if a.role == "integrator" and a.ic_V is None]
+    if not settling:
+        return net
+    brief = scenario.model_copy(update={"duration_s": scenario.dt_s or 1e-3})  # its start is all it is run for
+    start = simulate(net, plant, bench, machine, brief, ideal=True).history  # noise-free (offsets: a 6 ms lag's)
+    return net.model_copy(update={"amplifiers": [
+        a.model_copy(update={"ic_V": float(start[a.id][0])}) if a.id in settling else a for a in net.amplifiers]})
 
 
 def engine_step(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,

@@ -1,6 +1,8 @@
 """`patchgen simulate` and `patchgen spice` from the command line."""
 
 import json
+import math
+import re
 import shutil
 import subprocess
 import sys
@@ -158,3 +160,29 @@ def test_spice_refuses_a_programmed_machine_in_one_line(tmp_path):
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
     assert "machine: LUCIDAC is programmed, not patched" in r.stderr and "patchgen export" in r.stderr
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
+def test_spice_starts_a_differences_lag_settled_as_patchgen_does(tmp_path):
+    """A GP-6 without the differentiator role (and x10 inputs enough for the difference's large
+    coefficients): the rate is theta minus its lag, which patchgen starts settled on theta. The deck
+    gives the lag that value as its IC, and ngspice agrees (measured 0.2 % of peak; with the lag
+    at 0 V it was 67 %)."""
+    from importlib import resources
+
+    text = (resources.files("patchgen.profiles") / "machines" / "gp6.toml").read_text()
+    text = text.replace(', "differentiator"]', "]").replace("x10 = 2 }", "x10 = 30 }").replace('id = "gp6"',
+                                                                                              'id = "gp6-no-diff"')
+    profile = tmp_path / "gp6-no-diff.toml"
+    profile.write_text(text)
+    r = run("spice", "bench-recommended", "--machine", str(profile), "--scenario", "offset-10deg", "--ideal",
+            "-o", str(tmp_path / "o"), "--json")
+    assert r.returncode == 0, r.stderr
+    rep = json.loads(r.stdout)
+    assert rep["agrees"] and all(v["max_rel"] < 0.01 for v in rep["signals"].values())
+    deck = (tmp_path / "o" / "patch.cir").read_text()
+    lag = re.search(r"^\* (\w+): integrator, carries -1 x ([0-9.]+) V/unit x theta_dot_lag$", deck, re.M)
+    ic = re.search(rf"v\({lag.group(1).lower()}_out\)=(\S+)", next(ln for ln in deck.splitlines()
+                                                                 if ln.startswith(".ic ")))
+    # settled on theta's 10 deg at its scale (its sign: the amplifier carries minus it)
+    assert float(ic.group(1)) == pytest.approx(-float(lag.group(2)) * math.radians(10.0), rel=1e-3)

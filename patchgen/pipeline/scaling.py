@@ -12,6 +12,7 @@ scaling is linear, so a signal's peak moves with its scale; the scaled patch is 
 bench and kept only if its signals stay inside the reference and it is held as often (else
 ROUNDS tries nearer the sensor constants), and those runs stand in for the prediction's.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -102,8 +103,8 @@ def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: N
     # linear circuit's, which a scaling moves: the envelope is then the patch's with no rails
     clipped = any(v > machine.imperfections.saturation_V for v in _peaks(runs).values())
     linear = not clipped and all(r.held for rs in runs.values() for r in rs)
-    if clipped and not (first := snr_scales(real, on_bench, machine, partial_sums(net), sensor_inverters(net))).changes:
-        return ScaledPatch(net, first, runs)  # nothing moves on the bench's own peaks: nor with no rails, higher
+    if clipped and not (own := snr_scales(real, on_bench, machine, partial_sums(net), sensor_inverters(net))).changes:
+        return ScaledPatch(net, own, runs)  # nothing moves on the bench's own peaks: nor with no rails, higher
     base = block_peaks(real, _quantities(net), _peaks(run(net, rails=False)) or _peaks(runs)) if clipped else on_bench
     why_not = ""
     # a partial sum or an inverter scaled takes a pot more: without them if it does not fit, or if it
@@ -129,8 +130,8 @@ def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: N
                 return _kept(scaled, scaling, why_not, None)
             got = run(scaled, hold=CHECK_RUNS)
             reached = block_peaks(real, _quantities(scaled), _peaks(got))
-            first = _held({name: rs[:CHECK_RUNS] for name, rs in runs.items()})
-            if _within(reached, on_bench, machine) and all(_held(got).get(s, 0.0) >= v for s, v in first.items()):
+            before = _held({name: rs[:CHECK_RUNS] for name, rs in runs.items()})
+            if _within(reached, on_bench, machine) and all(_held(got).get(s, 0.0) >= v for s, v in before.items()):
                 return _kept(scaled, scaling, why_not, got)
         else:
             why_not = why_not or (f"scaled, even to {0.5 ** (ROUNDS - 1):g} of its factors (ln), the patch passed "

@@ -82,8 +82,17 @@ class Scaling:
 
     def notes(self) -> list[str]:
         """One line per block scaled: its factor and the limit it reached."""
-        return [f"{b} carried at {f:.3g} times its sensor-constant scale for signal-to-noise: {self.why[b]}"
+        return [f"{_named(b)} carried at {f:.3g} times its sensor-constant scale for signal-to-noise: {self.why[b]}"
                 for b, f in self.factors.items() if f != 1.0]
+
+
+def _named(name: str) -> str:
+    """A scaled signal as a note names it: a block, a block's partial sum, or a sensor's inverter."""
+    if name.startswith(PARTIAL):
+        return f"{name} (the sum of {name.removeprefix(PARTIAL)}'s terms of the other sign)"
+    if name.startswith(INVERTED):
+        return f"the inverter of {name.removeprefix(INVERTED)}"
+    return name
 
 
 @dataclass(frozen=True)

@@ -71,7 +71,9 @@ def test_quanser_ip02s_partial_sum_comes_inside_the_reference():
     assert rows["u_c"] == LIMITED and rows["partial u_c"] == "" and "not an overload" in levels_section(
         scaled, net).note
     assert len(net.pots) == len(plain_net.pots) + 2
-    assert any(n.startswith("partial u_c carried at 0.334 times") for n in net.notes), net.notes
+    assert any(n.startswith("partial u_c (the sum of u_c's terms of the other sign) carried at 0.334 times")
+               for n in net.notes), net.notes
+    assert any(n.startswith("the inverter of s carried at 7.4") for n in net.notes), net.notes
 
 
 def test_a_compensators_realisation_is_scaled_and_wires_the_same_law():

@@ -20,7 +20,6 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import control
 import numpy as np
 from scipy.integrate import solve_ivp
 
@@ -96,6 +95,8 @@ def voltage_for(p: RotaryParams, a: float, alpha_dot: float) -> float:
 
 def lqr_gain(p: RotaryParams, Q=LQR_Q, R: float = LQR_R) -> np.ndarray:
     """K of u = -K x from control.lqr on the plant linearised upright, shape (4,)."""
+    import control  # loaded only where a hand-off gain is asked for, as patchgen's API does
+
     A, B = linear_matrices(p)
     K, _, _ = control.lqr(A, B, np.diag(Q), np.array([[R]]))
     return np.asarray(K, dtype=float).ravel()

@@ -20,6 +20,7 @@ import numpy as np
 
 from patchgen.inputs.errors import InputError
 from patchgen.patch.netlist import Netlist
+from patchgen.patch.readback import law_read
 from patchgen.patch.reading import Stage, read
 from patchgen.plant.equations import PLANT_STATES
 from patchgen.profiles.bench import BenchProfile
@@ -53,6 +54,7 @@ class Circuit:
     param2: np.ndarray
     ic_V: np.ndarray
     output_index: int  # signal index of the control voltage u_c
+    modes: np.ndarray  # complex eigenvalues of the wired law's A_c (patchgen.patch.readback), as compiled
 
     @property
     def n_sensors(self) -> int:
@@ -75,40 +77,12 @@ class Circuit:
                 for j, k in enumerate(self.amp_kind) if k in (LAG, DIFFERENTIATOR)]
 
     def internal_rates(self) -> list[float]:
-        """|eigenvalue| (1/s) of each mode of the circuit's own dynamics, the sensors held at zero and
-        u_c driving nothing: how fast its states move among themselves. A lag built from an integrator
-        and a summer (a difference on a machine without a differentiator) has no element time constant
-        of its own; its mode has, and the step must resolve it as it resolves a lag element."""
-        states = [j for j, k in enumerate(self.amp_kind) if k in (INTEGRATOR, LAG, DIFFERENTIATOR)]
-        if not states:
-            return []
-        col = {j: i for i, j in enumerate(states)}
-        ns, n = self.n_sensors, len(states)
-        sig = np.zeros((ns + self.n_amps, n))  # each signal as a row over the states
-        A = np.zeros((n, n))
-
-        def summed(j: int) -> np.ndarray:
-            lo, hi = self.in_ptr[j], self.in_ptr[j + 1]
-            return self.in_gain[lo:hi] @ sig[self.in_src[lo:hi]]
-
-        for j in states:
-            if self.amp_kind[j] != DIFFERENTIATOR:
-                sig[ns + j, col[j]] = 1.0
-        for j, k in enumerate(self.amp_kind):
-            if k == SUMMER:
-                sig[ns + j] = -summed(j)
-            elif k == DIFFERENTIATOR:
-                own = np.eye(n)[col[j]]
-                v = summed(j) - own
-                sig[ns + j] = -self.param1[j] * v
-                A[col[j]] = self.param2[j] * v
-        for j in states:
-            if self.amp_kind[j] == INTEGRATOR:
-                A[col[j]] = -self.param1[j] * summed(j)
-            elif self.amp_kind[j] == LAG:
-                A[col[j]] = self.param1[j] * (-summed(j) - np.eye(n)[col[j]])
-        lam = np.abs(np.linalg.eigvals(A))
-        return [float(v) for v in lam if v > 1e-9 * max(1.0, lam.max())]
+        """|eigenvalue| (1/s) of each mode of the circuit's own dynamics (the wired law's A_c, the
+        sensors held at zero): how fast its states move among themselves. A lag built from an
+        integrator and a summer (a difference on a machine without a differentiator) has no element
+        time constant of its own; its mode has, and the step must resolve it as it resolves a lag."""
+        lam = np.abs(self.modes)
+        return [float(v) for v in lam if v > 1e-9 * max(1.0, lam.max())] if lam.size else []
 
     def drifting(self) -> np.ndarray:
         """Mask of amplifiers whose capacitor integrates offset and bias (integrators, lags)."""
@@ -166,6 +140,7 @@ def compile_circuit(net: Netlist, machine: MachineProfile, bench: BenchProfile) 
         param2=np.array(p2, dtype=np.float64),
         ic_V=np.array(ic, dtype=np.float64),
         output_index=index[reading.output],
+        modes=np.linalg.eigvals(law_read(reading, src).Ac),
     )
 
 

@@ -15,7 +15,7 @@ import numpy as np
 from patchgen.design.controller import Controller
 from patchgen.inputs.errors import InputError
 from patchgen.patch.netlist import Netlist
-from patchgen.patch.reading import read
+from patchgen.patch.reading import Reading, read
 
 DYNAMIC = ("integrator", "lag", "differentiator")
 
@@ -57,7 +57,12 @@ def wired_law(net: Netlist, output: str | None = None) -> WiredLaw:
     WiredLaw
         Ac, Bc, Cc, Dc over the states of the integrators, lags and differentiator roll-offs.
     """
-    r = read(net)
+    return law_read(read(net), f"netlist {net.design}", output)
+
+
+def law_read(r: Reading, source: str, output: str | None = None) -> WiredLaw:
+    """:func:`wired_law` of a netlist already read (a simulator's reading, its differentiators given
+    the machine's default roll-off); ``source`` names it in an error."""
     sensors = list(r.sensors)
     dyn = [aid for aid, a in r.amplifiers.items() if a.role in DYNAMIC]
     ny, nx = len(sensors), len(dyn)
@@ -72,7 +77,7 @@ def wired_law(net: Netlist, output: str | None = None) -> WiredLaw:
             expr[aid] = _unit(dyn.index(aid), nx + ny)
         elif a.role == "differentiator":  # z' = (in - z)/r, out = -(T_d/r)(in - z)
             if not a.rolloff_s:
-                raise InputError(f"netlist {net.design}", f"amplifiers.{aid}.rolloff_s",
+                raise InputError(source, f"amplifiers.{aid}.rolloff_s",
                                  "a differentiator needs a roll-off > 0 (a pure one has no state-space law)")
             expr[aid] = -(a.T_d_s / a.rolloff_s) * (input_sum(a) - _unit(dyn.index(aid), nx + ny))
         else:

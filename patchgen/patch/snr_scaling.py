@@ -33,7 +33,9 @@ subject to
 - no coefficient below the dial floor (a setting whose dial step is more than DIAL_SHARE of
   itself) unless it was already, and then no smaller than it was (the signal-to-quantisation
   ratio of the law is never made worse than the dial allows);
-- a coefficient wired straight (exactly an input weight, no pot) stays exactly that;
+- a coefficient wired straight (exactly an input weight, no pot) stays exactly that (on a
+  programmed machine every coefficient is a setting, but a sensor's unit coefficient into its one
+  consumer: a front-panel input has no coefficient of its own);
 - no block scaled down unless its peak is past HEADROOM.
 
 Every scale 1 is feasible (the limits are relative to the coefficients as they are), so both
@@ -144,8 +146,8 @@ def snr_scales(real: Realization, peaks: Mapping[str, BlockPeak], machine: Machi
     Returns
     -------
     Scaling
-        Block name (and "partial <block>") -> factor for every block the realisation has, and why
-        each scaled one stopped.
+        Block name (and "partial <block>", "inverted <sensor>") -> factor for every block the
+        realisation has and every stage given a scale, and why each scaled one stopped.
     """
     from scipy.optimize import linprog  # 0.1 s of import, only where a scaling is chosen
 

@@ -94,18 +94,19 @@ def scaled_patch(d: Design, machine: MachineProfile, bench: BenchProfile, net: N
     loading.start()  # the programme's solver loads while the envelope's runs are made (0.1 s)
     runs = run(net)
     loading.join()
-    if not _peaks(runs):  # a pendulum that falls or runs to the switches: its signals are no envelope
+    peaks = _peaks(runs)
+    if not peaks:  # a pendulum that falls or runs to the switches: its signals are no envelope
         note = ("not scaled for signal-to-noise: no run on the bench held the pendulum, whose signals would be "
                 "the envelope")
         return ScaledPatch(net.model_copy(update={"notes": [*net.notes, note]}), None, runs)
-    on_bench = block_peaks(real, _quantities(net), _peaks(runs))
+    on_bench = block_peaks(real, _quantities(net), peaks)
     # an amplifier clipped at its rails holds the others back, so their peaks say less than the
     # linear circuit's, which a scaling moves: the envelope is then the patch's with no rails
-    clipped = any(v > machine.imperfections.saturation_V for v in _peaks(runs).values())
+    clipped = any(v > machine.imperfections.saturation_V for v in peaks.values())
     linear = not clipped and all(r.held for rs in runs.values() for r in rs)
     if clipped and not (own := snr_scales(real, on_bench, machine, partial_sums(net), sensor_inverters(net))).changes:
         return ScaledPatch(net, own, runs)  # nothing moves on the bench's own peaks: nor with no rails, higher
-    base = block_peaks(real, _quantities(net), _peaks(run(net, rails=False)) or _peaks(runs)) if clipped else on_bench
+    base = block_peaks(real, _quantities(net), _peaks(run(net, rails=False)) or peaks) if clipped else on_bench
     why_not = ""
     # a partial sum or an inverter scaled takes a pot more: without them if it does not fit, or if it
     # would take the last spare pot (the checks' test voltages come from one) to no overload's cure

@@ -57,8 +57,6 @@ def bench_section(pred: BenchPrediction, d: Design, machine: MachineProfile, ben
 
 
 LOW_SHARE = 0.1  # an amplifier whose expected peak is under this share of the reference is marked low
-
-
 LIMITED = "the actuator's limit"  # a command past the reference that the actuator saturates first
 
 

@@ -23,7 +23,7 @@ def test_every_shipped_file_is_package_data():
     kinds = {k: shipped(k) for k in ("design", "scenario", "machine", "bench")}
     assert "bench-recommended" in kinds["design"] and "hold-120s" in kinds["scenario"]
     assert kinds["machine"] == ["gp6", "lucidac", "the-analog-thing"]
-    assert kinds["bench"] == ["quanser-ip02", "uw-1991", "uw-1991-uncertain"]
+    assert kinds["bench"] == ["quanser-ip02", "qube-servo-2", "uw-1991", "uw-1991-uncertain"]
     data = SETUPTOOLS["package-data"]
     for folder in ("profiles/machines", "profiles/benches"):
         assert f"{folder}/*.toml" in data["patchgen"]

@@ -33,7 +33,7 @@ def bench_test_cmd(spec, out_dir, bench_name, seed, as_json, force) -> None:
     from patchgen.render.terminal import say
 
     check_out_dir(out_dir, FILES, force)
-    inputs = load_inputs(spec)
+    inputs = load_inputs(spec, command="bench-test")
     if bench_name is not None:  # any bench: its sensors need not be those the spec's patch reads
         inputs = inputs._replace(bench=load_bench(bench_name, "--bench", ""))
     report = run_bench_test(inputs, seed)

@@ -33,7 +33,7 @@ def check_cmd(spec: str, readings_path: str, machine: str | None, as_json: bool)
     """
     if not readings_path:
         raise InputError("--readings", "", "is an empty file name: give the filled static-check.csv")
-    report = run_check(load_inputs(spec, machine=machine), readings_path)
+    report = run_check(load_inputs(spec, machine=machine, command="check"), readings_path)
     if as_json:
         click.echo(json_text(report.summary()), nl=False)
     else:

@@ -29,7 +29,7 @@ def export_cmd(spec, machine, out_dir, scenario_path, as_json, force) -> None:
     built and sanity-checked with its client library lucipy (pip install 'patchgen[lucidac]'), a
     script that loads and runs it, and a table of which element carries what."""
     check_out_dir(out_dir, EXPORT_FILES, force)
-    inputs = load_inputs(spec, machine=machine)
+    inputs = load_inputs(spec, machine=machine, command="export")
     check_programmed(inputs)
     plan = ExportPlan()
     if scenario_path is not None:

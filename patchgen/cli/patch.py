@@ -31,7 +31,7 @@ def patch_cmd(spec: str, out_dir: str, force: bool, runs_hold: int, no_predict: 
     loop as patched beside the design's), pots.csv, patch-sheet.html, patch-sheet.md (with the bench
     prediction), wiring.svg and static-check.csv (the readings for patchgen check)."""
     check_out_dir(out_dir, PATCH_FILES, force)
-    inputs = load_inputs(spec, machine=machine)
+    inputs = load_inputs(spec, machine=machine, command="patch")
     report = run_patch(inputs, PatchPlan(runs_hold=runs_hold, predict=not no_predict))
     written = write_files(out_dir, patch_report_files(report, inputs.machine, inputs.bench), force=force)
     if as_json:

@@ -50,7 +50,7 @@ def recommend_cmd(spec, out_dir, runs, scenario_paths, seed, all_runs, bench_nam
     of every scenario, variants included.
     """
     check_out_dir(out_dir, RECOMMEND_FILES, force)
-    inputs = load_inputs(spec, bench_name, "--bench", machine)
+    inputs = load_inputs(spec, bench_name, "--bench", machine, command="recommend")
     if bench_name is not None:  # the recommended spec names the bench it was chosen on
         inputs = inputs._replace(spec=inputs.spec.model_copy(update={"bench": bench_name}))
     scenarios = tuple(scenario_for(p, inputs.spec, runs).judged()

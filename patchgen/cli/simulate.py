@@ -51,7 +51,7 @@ def simulate_cmd(spec, scenario_path, out_dir, seed, runs, ideal, spread_text, v
         spread = {name: frac for name in parse_vary(vary)}
     check_out_dir(out_dir, SIMULATE_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one simulates
-    inputs = load_inputs(spec, bench_name, "--bench", machine)
+    inputs = load_inputs(spec, bench_name, "--bench", machine, command="simulate")
     scenario = scenario_for(scenario_path, inputs.spec, runs, ideal)
     plan = SimulatePlan(runs=runs, seed=seed, ideal=ideal, spread=spread, bench_spread=bench_spread,
                         corner_runs=corner_runs)

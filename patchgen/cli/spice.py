@@ -46,7 +46,7 @@ def spice_cmd(spec, scenario_path, out_dir, ideal, step_s, tolerance, machine, s
     Exit 0 when they agree, 1 when not, 3 without ngspice (the deck is still written)."""
     check_out_dir(out_dir, SPICE_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while ngspice runs
-    inputs = load_inputs(spec, machine=machine)
+    inputs = load_inputs(spec, machine=machine, command="spice")
     scenario = scenario_for(scenario_path, inputs.spec, 1, ideal)
     check_spice_points(scenario, step_s)
     job = spice_job(inputs, scenario, SpicePlan(ideal=ideal, step_s=step_s, tolerance=tolerance))

@@ -31,7 +31,7 @@ def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: s
     """Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2): the gains, the
     margins, the pots that would change, and how the nominal patch (as wired) does on that plant."""
     plan = SweepPlan(tuple(parse_vary(vary)), parse_by(by_text), workers, runs)
-    inputs = load_inputs(spec, machine=machine)
+    inputs = load_inputs(spec, machine=machine, command="sweep")
     scenario = scenario_for(scenario_path, inputs.spec, runs)  # a bad scenario fails here, in one line
     report = run_sweep(inputs, scenario, plan)
     if as_json:

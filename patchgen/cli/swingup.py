@@ -43,7 +43,7 @@ def swingup_cmd(spec, out_dir, strategy, force_limit, hold_s, seed, compare, mac
     noise, drift)."""
     check_out_dir(out_dir, SWINGUP_FILES, force)
     plot_helper.start()  # matplotlib loads on the other core while this one computes
-    inputs = load_inputs(spec, machine=machine)
+    inputs = load_inputs(spec, machine=machine, command="swingup")
     plan = SwingupPlan(strategy=strategy, force_limit_N=force_limit, hold_s=hold_s, seed=seed, compare=compare)
     report = run_swingup(inputs, plan, comparing=comparing)
     files = swingup_files(report, inputs.machine, inputs.bench, svg)

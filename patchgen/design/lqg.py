@@ -22,8 +22,8 @@ from patchgen.design.observer import ObserverError, reduced_observer, reduced_ob
 from patchgen.design.precision import GainSpread
 from patchgen.design.riccati import STABLE_TOL, design_spread, lqr_gain, stabilisable
 from patchgen.inputs.spec import DesignSpec, q_matrix, r_matrix
-from patchgen.plant.cart_pendulum import ESTIMATED_RATE, RATE_OF
 from patchgen.plant.equations import PlantParams
+from patchgen.plant.rotary_equations import RotaryParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
@@ -56,7 +56,7 @@ class Design:
         return self.model.states
 
     @property
-    def plant(self) -> PlantParams:
+    def plant(self) -> PlantParams | RotaryParams:
         """The spec's plant as the plant equations take them (the mechanism; the drive is the
         spec's actuator): what every stage after the design simulates, linearises or patches for."""
         return plant_params(self.spec)
@@ -112,8 +112,8 @@ def differentiator_controller(model: LinearModel, K: np.ndarray, rolloff: float)
     roll-off (theta_dot ~ s/(rolloff s + 1) theta); integral states from integrators; an actuator
     state (if any) from a model of the actuator driven by the commanded force."""
     my = list(model.measured)
-    derived = [(p, r) for p, r in RATE_OF.items() if r not in my]  # theta_dot's first, as the thesis's
-    derived.sort(key=lambda pr: pr[1] != ESTIMATED_RATE)
+    derived = [(p, r) for p, r in model.plant.rate_of.items() if r not in my]  # theta_dot's first, as the thesis's
+    derived.sort(key=lambda pr: pr[1] != model.plant.angle_rate)
     nd = len(derived)
     names: list[str] = [f"dfilt_{p}" for p, _ in derived]
     ip = integrator_part(model, K)
@@ -150,7 +150,7 @@ def differentiator_controller(model: LinearModel, K: np.ndarray, rolloff: float)
     return Controller(tuple(names), Ac, Bc, Cc, Dc)
 
 
-def design(spec: DesignSpec, bench: BenchProfile | None = None, *, plant: PlantParams | None = None,
+def design(spec: DesignSpec, bench: BenchProfile | None = None, *, plant: PlantParams | RotaryParams | None = None,
            default_rolloff_s: float | None = None) -> Design:
     """Run the whole design of a spec: LQR gain, estimator, compensator and loop margins.
 
@@ -184,7 +184,8 @@ def design(spec: DesignSpec, bench: BenchProfile | None = None, *, plant: PlantP
         Q, R, K, S = lqr(spec, model)
         cl = np.linalg.eigvals(model.A - model.B @ K)
         lqr_m = loop_margins(model.A, model.B, K)
-        zeros = {"s/F_U": plant_zeros(spec, "s"), "s_dot/F_U": plant_zeros(spec, "s_dot")}
+        pm = spec.plant_model
+        zeros = {f"{out}/{pm.input}": plant_zeros(spec, out) for out in (pm.position, pm.rate_of[pm.position])}
     redesign = lambda sp: design(sp, bench, plant=plant, default_rolloff_s=default_rolloff_s)
     with failing_as(spec.path, "estimator", f"the {spec.estimator.kind} estimator"):
         est, ctl, lqg_m = _estimator(spec, bench, model, K, lqr_m, default_rolloff_s, redesign)
@@ -195,7 +196,7 @@ def design(spec: DesignSpec, bench: BenchProfile | None = None, *, plant: PlantP
 
 
 def design_on(spec: DesignSpec, machine: MachineProfile, bench: BenchProfile | None, *,
-              plant: PlantParams | None = None) -> Design:
+              plant: PlantParams | RotaryParams | None = None) -> Design:
     """The design of a spec for the machine and bench it is patched on and tested against.
 
     Parameters

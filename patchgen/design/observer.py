@@ -27,7 +27,6 @@ import scipy.linalg as sla
 
 from patchgen.design.controller import Controller, ReducedObserver, integrator_part
 from patchgen.design.model import LinearModel
-from patchgen.plant.cart_pendulum import POSITION, RATE_OF
 
 FIT_TOL = 1e-9  # relative: the structure's linear conditions hold to rounding, and a root is real
 QUADRATIC_MIN = 1e-14  # below this leading coefficient the s_dot condition is linear in the free gain
@@ -46,9 +45,10 @@ def reduced_observer(model: LinearModel, pole: float) -> ReducedObserver:
     """The structured reduced observer of the design model with error decay rate ``pole`` (rad/s)."""
     y = list(model.measured)
     w = list(unmeasured_states(model))
-    if RATE_OF[POSITION] not in y:
-        raise ObserverError(f"the reduced observer is built for a measured {RATE_OF[POSITION]}: without one, "
-                            "a differentiator or a Kalman filter finds it")
+    position = model.plant.position
+    if model.plant.rate_of[position] not in y:
+        raise ObserverError(f"the reduced observer is built for a measured {model.plant.rate_of[position]}: without "
+                            "one, a differentiator or a Kalman filter finds it")
     iy = [model.index(s) for s in y]
     iw = [model.index(s) for s in w]
     A, B = model.A, model.B[:, 0]
@@ -56,7 +56,7 @@ def reduced_observer(model: LinearModel, pole: float) -> ReducedObserver:
     Awy, Aww = A[np.ix_(iw, iy)], A[np.ix_(iw, iw)]
     By, Bw = B[iy], B[iw]
     nw, ny = len(w), len(y)
-    free = [(r, c) for r in range(nw) for c in range(ny) if y[c] != "s"]
+    free = [(r, c) for r in range(nw) for c in range(ny) if y[c] != position]
 
     def lr_of(p):
         L = np.zeros((nw, ny))
@@ -78,7 +78,8 @@ def reduced_observer(model: LinearModel, pole: float) -> ReducedObserver:
     if null.shape[1] != 1 or not np.allclose(M @ p0, rhs, atol=FIT_TOL * max(1.0, pole)):
         raise ObserverError("the unmeasured states cannot be given the observer's structure")
     v = null[:, 0]
-    it, iv = w.index("theta_dot"), y.index("s_dot")
+    rate = model.plant.rate_of[position]
+    it, iv = w.index(model.plant.angle_rate), y.index(rate)
 
     def g(t):
         p = p0 + t * v
@@ -93,7 +94,8 @@ def reduced_observer(model: LinearModel, pole: float) -> ReducedObserver:
     else:
         roots = [-coef[2] / coef[1]] if abs(coef[1]) > 0 else []
     if not roots:
-        raise ObserverError(f"no real observer gain keeps s_dot out of theta_dot at pole {pole:g} rad/s")
+        raise ObserverError(f"no real observer gain keeps {rate} out of {model.plant.angle_rate} at pole {pole:g} "
+                            "rad/s")
     t = min(roots, key=abs)
     p = p0 + t * v
     L, F = lr_of(p), F_of(p)

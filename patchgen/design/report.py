@@ -40,7 +40,7 @@ def design_dict(d: Design) -> dict:
         "description": spec.description,
         "source": spec.source,
         "states": list(d.states),
-        "control_law": "u = -K x (u: force on the cart, N)",
+        "control_law": f"u = -K x (u: {spec.plant_model.input_what}, {spec.plant_model.input_unit})",
         "A": d.model.A.tolist(),
         "B": d.model.B[:, 0].tolist(),
         "Q": d.Q.tolist(),
@@ -55,7 +55,7 @@ def design_dict(d: Design) -> dict:
         "zeros": {k: [_c(z) for z in v] for k, v in d.zeros.items()},
         "lqr_margins": margins_dict(d.lqr_margins),
         "actuator_model": spec.actuator.model,
-        "actuator_K_U": spec.actuator.K_U,  # N/V
+        "actuator_K_U": spec.actuator.K_U,  # the plant's input (N, or motor V) per command volt
         "actuator_tau_s": None if spec.actuator.model == "gain" else spec.actuator.tau,
         "notes": design_notes(d),
     }

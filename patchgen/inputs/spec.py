@@ -8,7 +8,7 @@ profile named by ``bench`` (patchgen/profiles/benches/), kept apart on purpose.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, PrivateAttr, create_model, field_validator
@@ -18,8 +18,7 @@ from patchgen.inputs.errors import Cure, InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded, zero_or_at_least
 from patchgen.inputs.resources import resolve
 from patchgen.inputs.validation import read_toml, validate
-from patchgen.plant.cart_pendulum import ESTIMATED_RATE, MEASURED, PARAMETERS, RATE_OF
-from patchgen.plant.equations import PLANT_STATES
+from patchgen.plant.plant_model import CART, DEFAULT, PLANT_MODELS, ROTARY, PlantModel
 
 # weights: Q entries and R within WEIGHT_RANGE (a weight is relative, and a spread of more than
 # 1e16 between them leaves the Riccati solver little but rounding error); Bryson excursions
@@ -38,45 +37,80 @@ Entry = Annotated[Real, Field(ge=-NOISE_MAX, le=NOISE_MAX)]
 Weight = Annotated[Real, Field(ge=-WEIGHT_RANGE[1], le=WEIGHT_RANGE[1])]
 
 
-PlantSpec = create_model(
-    "PlantSpec", __base__=InputModel, __module__=__name__,
-    __doc__="Table B.1 parameters, SI units, within the bounds of a bench-sized cart and pendulum: "
-            "one field per parameter of the plant model (patchgen.plant.cart_pendulum.PARAMETERS).",
-    **{p.name: (Real, bounded(p.lo, p.hi, description=p.what, **({} if p.default is None else {"default": p.default})))
-       for p in PARAMETERS})
+def _plant_table(plant: PlantModel, class_name: str):
+    """The ``[plant]`` table of a spec for one plant model: its ``model`` and one field per parameter."""
+    def field(p):
+        if p.name in plant.optional:
+            return Real | None, bounded(p.lo, p.hi, default=None, description=p.what)
+        return Real, bounded(p.lo, p.hi, description=p.what, **({} if p.default is None else {"default": p.default}))
+    return create_model(
+        class_name, __base__=InputModel, __module__=__name__,
+        __doc__=f"The plant's parameters, SI units, within the bounds of a bench-sized one: {plant.what}; one field "
+                "per parameter of the plant model (patchgen.plant.plant_model).",
+        model=(Literal[plant.name], Field(plant.name, description="the plant model: " + ", ".join(PLANT_MODELS))),
+        **{p.name: field(p) for p in plant.parameters})
+
+
+PlantSpec = _plant_table(CART, "PlantSpec")  # table B.1's parameters
+RotaryPlantSpec = _plant_table(ROTARY, "RotaryPlantSpec")
 
 
 SENSOR_RANGE = (1e-3, 1e3)  # V per SI unit: a millivolt to a kilovolt per metre, radian, m/s
 
 
-class SensorSpec(InputModel):
-    """Sensor constants (table A.2), volts per SI unit. theta_dot is the scale of the voltage
-    that carries theta_dot on the machine (differentiator or estimator output)."""
+class Sensors(InputModel):
+    """Sensor constants, volts per SI unit of each quantity the bench reads (table A.2 for the
+    cart), and the scale of the voltage that carries each rate the patch finds."""
 
-    s: Real = bounded(*SENSOR_RANGE, description="V/m")
-    theta: Real = bounded(*SENSOR_RANGE, description="V/rad")
-    s_dot: Real = bounded(*SENSOR_RANGE, description="V/(m/s)")
-    theta_dot: Real | None = bounded(*SENSOR_RANGE, default=None, description="V/(rad/s); default theta x 1 s")
-    measured: list[Literal[MEASURED]] = Field(
-        default_factory=lambda: list(MEASURED), description="what the bench's sensors read (default s, theta, "
-        "s_dot); a rate left out is the patch's to find from its position, as theta_dot is: a lab without a "
-        "tachometer leaves out s_dot, whose constant is then the scale of its voltage on the machine")
-    labels: dict[Literal[MEASURED], Annotated[str, Field(min_length=1, max_length=80)]] = Field(
-        default_factory=dict, description="what reads each quantity, as the sheet names it (default: the thesis "
-                                          "bench's pots and tachometer)")
+    plant_model: ClassVar[PlantModel]
 
     def constants(self) -> dict[str, float]:
-        """Volts per SI unit of each quantity the bench's sensors read, by name, in MEASURED's order."""
-        return {q: getattr(self, q) for q in MEASURED if q in self.measured}
+        """Volts per SI unit of each quantity the bench's sensors read, by name, in the plant's order."""
+        return {q: getattr(self, q) for q in self.plant_model.measurable if q in self.measured}
 
     def read(self) -> tuple[str, ...]:
-        """The quantities the sensors read, in MEASURED's order."""
-        return tuple(q for q in MEASURED if q in self.measured)
+        """The quantities the sensors read, in the plant's order."""
+        return tuple(q for q in self.plant_model.measurable if q in self.measured)
 
     def derived(self) -> tuple[str, ...]:
-        """The rates the patch finds from their positions: theta_dot always, s_dot without a sensor."""
-        rates = [r for r in RATE_OF.values() if r not in self.measured]
-        return tuple(sorted(rates, key=lambda r: r != ESTIMATED_RATE))  # theta_dot first, as the thesis's
+        """The rates the patch finds from their positions: the pendulum's always, first, as the
+        thesis's; any other without a sensor (the cart's s_dot, the rotary arm's alpha_dot)."""
+        plant = self.plant_model
+        rates = [r for r in plant.rate_of.values() if r not in self.measured]
+        return tuple(sorted(rates, key=lambda r: r != plant.angle_rate))
+
+
+def _sensor_table(plant: PlantModel, class_name: str):
+    """The ``[sensors]`` table for one plant model: a constant per state (a position's and a rate
+    its reference bench reads required; another rate's its position's x 1 s unless given), what
+    the bench reads and what each sensor is called."""
+    units = plant.units
+    fields = {}
+    for name in plant.state_names:
+        unit = units[name]
+        if name in plant.rate_of:  # a position: always read
+            fields[name] = (Real, bounded(*SENSOR_RANGE, description=f"V/{unit}"))
+        elif name in plant.measured:
+            fields[name] = (Real, bounded(*SENSOR_RANGE, description=f"V/({unit})"))
+        else:
+            fields[name] = (Real | None, bounded(*SENSOR_RANGE, default=None, description=(
+                f"V/({unit}); default {plant.position_of[name]} x 1 s")))
+    default = ", ".join(plant.measured)
+    fields["measured"] = (list[Literal[plant.measurable]], Field(
+        default_factory=lambda: list(plant.measured), description=f"what the bench's sensors read (default "
+        f"{default}); a rate left out is the patch's to find from its position, as {plant.angle_rate} is, and its "
+        "constant is then the scale of its voltage on the machine"))
+    fields["labels"] = (dict[Literal[plant.measurable], Annotated[str, Field(min_length=1, max_length=80)]], Field(
+        default_factory=dict, description="what reads each quantity, as the sheet names it (default: the plant's "
+                                          "reference bench's sensors)"))
+    table = create_model(class_name, __base__=Sensors, __module__=__name__,
+                         __doc__=f"Sensor constants of {plant.what}, volts per SI unit.", **fields)
+    table.plant_model = plant
+    return table
+
+
+SensorSpec = _sensor_table(CART, "SensorSpec")
+RotarySensorSpec = _sensor_table(ROTARY, "RotarySensorSpec")
 
 
 MIN_LAG_S = 1e-3  # a lag shorter than 1 ms is a gain to the loop, and would set a needlessly fine step
@@ -180,13 +214,19 @@ class DesignSpec(InputModel):
     _path: str = PrivateAttr(default="<spec>")
 
     @property
+    def plant_model(self) -> PlantModel:
+        """The plant the spec describes (its ``[plant] model``): what every layer asks for the
+        plant's states, parameters and linear model."""
+        return PLANT_MODELS[self.plant.model]
+
+    @property
     def path(self) -> str:
         """The file the spec was read from (or a label for a spec built in code)."""
         return self._path
 
     def states(self) -> list[str]:
         """State names in order: plant states, integral states, actuator state."""
-        out = list(PLANT_STATES)
+        out = list(self.plant_model.state_names)
         if self.integrators.int_s:
             out.append("int_s")
         if self.integrators.int_theta:
@@ -208,12 +248,39 @@ class DesignSpec(InputModel):
 
     def theta_dot_scale(self) -> float:
         """V per rad/s of the voltage carrying theta_dot: the spec's, else the theta sensor's."""
-        return self.sensors.theta_dot if self.sensors.theta_dot is not None else self.sensors.theta
+        return self.rate_scale(self.plant_model.angle_rate)
 
     def rate_scale(self, rate: str) -> float:
-        """V per SI unit of the voltage carrying a rate the patch finds (sensors.derived): theta_dot's
-        as theta_dot_scale says, s_dot's its sensor constant (the scale its tachometer would have)."""
-        return self.theta_dot_scale() if rate == ESTIMATED_RATE else getattr(self.sensors, rate)
+        """V per SI unit of the voltage carrying a rate: its own constant (a tachometer's, or the
+        scale the spec gives a rate the patch finds), else its position's x 1 s."""
+        own = getattr(self.sensors, rate)
+        return own if own is not None else getattr(self.sensors, self.plant_model.position_of[rate])
+
+
+class RotaryDesignSpec(DesignSpec):
+    """A design spec for the rotary pendulum (``[plant] model = "rotary-pendulum"``): its plant
+    and sensor tables; the rest as a cart's."""
+
+    plant: RotaryPlantSpec
+    sensors: RotarySensorSpec
+
+
+SPEC_TYPES = {CART.name: DesignSpec, ROTARY.name: RotaryDesignSpec}  # a spec's type, by its plant model
+
+
+def spec_type(data: dict, source: str) -> type[DesignSpec]:
+    """The spec type for a TOML document, by its ``[plant] model`` (the cart-pendulum when left out).
+
+    Raises
+    ------
+    InputError
+        A model that is not a plant model patchgen knows.
+    """
+    table = data.get("plant")
+    name = table.get("model", DEFAULT) if isinstance(table, dict) else DEFAULT
+    if not isinstance(name, str) or name not in SPEC_TYPES:
+        raise InputError(source, "plant.model", f"unknown plant model {name!r} (known: {', '.join(SPEC_TYPES)})")
+    return SPEC_TYPES[name]
 
 
 def load_spec(path: str | Path) -> DesignSpec:
@@ -234,7 +301,8 @@ def load_spec(path: str | Path) -> DesignSpec:
     InputError
         Any problem with the file or a field, naming both.
     """
-    spec = validate(DesignSpec, read_toml(resolve("design", path)), str(path))
+    data = read_toml(resolve("design", path))
+    spec = validate(spec_type(data, str(path)), data, str(path))
     spec._path = str(path)
     check_spec(spec)
     return spec
@@ -380,11 +448,12 @@ def check_spec(spec: DesignSpec) -> None:
     if a.model == "dc_motor" and a.tau > 0:
         raise err("actuator.tau", "a dc_motor's design model has no lag: its current follows the voltage (state "
                                   "the armature's inductance L_m in the bench profile, whose simulation has it)")
+    plant = spec.plant_model
     read = spec.sensors.measured
-    for q in MEASURED:
+    for q in plant.measurable:
         if read.count(q) > 1:
             raise err("sensors.measured", f"names {q} twice")
-    for p in RATE_OF:
+    for p in plant.rate_of:
         if p not in read:
             raise err("sensors.measured", f"must include {p}: a position is read on its sensor (the patch finds "
                                           "a rate from its position, not the other way round)")
@@ -393,7 +462,22 @@ def check_spec(spec: DesignSpec) -> None:
                                     "sensors.measured, choose \"differentiator\", \"filtered_differentiator\" or "
                                     "\"kalman\"")
     if spec.estimator.kind == "kalman":
-        _check_kalman(spec, len(PLANT_STATES) + (1 if a.model in LAG_MODELS else 0))
+        _check_kalman(spec, len(plant.states) + (1 if a.model in LAG_MODELS else 0))
+    if plant is ROTARY:
+        _check_rotary(spec)
+
+
+def _check_rotary(spec: DesignSpec) -> None:
+    """What the rotary pendulum's design does not take (yet): a force drive, integral states."""
+    a = spec.actuator
+    if a.model in ("dc_motor", "lag_zero"):
+        raise spec.error("actuator.model", f'"{a.model}" drives a cart: the rotary pendulum\'s motor is its plant\'s '
+                         '([plant] R_m, k_t, k_m), so its actuator is the amplifier, "gain" (or "lag"), K_U in motor '
+                         'volts per command volt')
+    for name in ("int_s", "int_theta"):
+        if getattr(spec.integrators, name):
+            raise spec.error(f"integrators.{name}", "integral states are built for the cart-pendulum only: leave it "
+                                                    "false for the rotary pendulum")
 
 
 def _check_kalman(spec: DesignSpec, n_est: int) -> None:

@@ -10,12 +10,14 @@ anywhere.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import tomli_w
 
 from patchgen.inputs.resources import resolve
 from patchgen.inputs.spec import DesignSpec
+from patchgen.plant.plant_model import DEFAULT
 
 
 def spec_toml(spec: DesignSpec, header: str = "") -> str:
@@ -34,6 +36,11 @@ def spec_toml(spec: DesignSpec, header: str = "") -> str:
         TOML that load_spec reads back as ``spec``.
     """
     data = spec.model_dump(mode="python", exclude_none=True)
+    # left out as when read: the default plant model (every spec before the rotary pendulum's), and
+    # a figure whose default is infinite (a rotary arm without a cable's limit), which TOML would
+    # write as inf and a spec may not state
+    plant = data["plant"]
+    data["plant"] = {k: v for k, v in plant.items() if not (k == "model" and v == DEFAULT or v == math.inf)}
     for kind in ("machine", "bench"):
         where = resolve(kind, data[kind], spec.path, kind)
         if where == Path(data[kind]):  # a user's file, not a shipped profile's stem

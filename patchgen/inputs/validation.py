@@ -163,7 +163,7 @@ def validate(model: type[M], data: Any, source: str, prefix: str = "") -> M:
         raise InputError(source, where, msg) from None
 
 
-def load_profile(model: type[M], name_or_path: str, kind: str, source: str, field: str,
+def load_profile(model: type[M] | Callable[[dict, str], type[M]], name_or_path: str, kind: str, source: str, field: str,
                  check: Callable[[M, str], None] | None = None) -> M:
     """A shipped profile by id (``uw-1991``) or any profile file by path.
 
@@ -172,8 +172,9 @@ def load_profile(model: type[M], name_or_path: str, kind: str, source: str, fiel
 
     Parameters
     ----------
-    model : type
-        The profile's model.
+    model : type or callable
+        The profile's model, or ``model(document, label)`` choosing it from the parsed file (a
+        bench profile's by its plant).
     name_or_path : str
         A shipped profile's id or a file's path.
     kind : str
@@ -191,7 +192,10 @@ def load_profile(model: type[M], name_or_path: str, kind: str, source: str, fiel
     path = resolve(kind, name_or_path, source, field)
     data = read_bytes(path, named_by=(source, field, f"{kind} profile") if source else None)
     label = str(path) if isinstance(path, Path) else str(name_or_path)
-    profile = validate(model, parse_toml(data, label), label)
+    document = parse_toml(data, label)
+    if not isinstance(model, type):
+        model = model(document, label)
+    profile = validate(model, document, label)
     if check is not None:
         check(profile, label)
     return profile

@@ -12,10 +12,14 @@ from patchgen.inputs.errors import InputError
 from patchgen.inputs.resources import folder, resolve
 from patchgen.inputs.scenario import Scenario, check_on_track, load_scenario
 from patchgen.inputs.spec import DesignSpec, load_spec
+from patchgen.plant.plant_model import CART
 from patchgen.profiles.bench import BenchProfile, bench_source, check_reads, load_bench
 from patchgen.profiles.machine import MachineProfile, load_machine
 
 MAX_SPICE_POINTS = 10**6  # transient points of an ngspice run (duration / --step)
+# the plant models the patch and every stage after it take so far: the rotary pendulum is designed
+# (patchgen design) but not yet patched, simulated or checked
+PATCHED_PLANTS = (CART.name,)
 
 
 class Inputs(NamedTuple):
@@ -27,7 +31,7 @@ class Inputs(NamedTuple):
 
 
 def load_inputs(path: str, bench: str | None = None, bench_source_name: str = "bench",
-                machine: str | None = None) -> Inputs:
+                machine: str | None = None, *, plants: tuple[str, ...] = PATCHED_PLANTS, command: str = "") -> Inputs:
     """The spec and the machine and bench profiles it names, each fully checked.
 
     Parameters
@@ -42,10 +46,21 @@ def load_inputs(path: str, bench: str | None = None, bench_source_name: str = "b
         A machine profile (a shipped id or a path) replacing the spec's ``machine``, in the spec
         too (a file by its absolute path), so that every later stage and a spec written from it
         (recommend's recommended.toml) name it; an error about it is the field ``machine``'s.
+    plants : tuple of str
+        The plant models the command takes (patchgen.plant.plant_model); another is refused.
+    command : str
+        The command, as a refusal names it.
     """
     spec = load_spec(path)
+    if spec.plant.model not in plants:
+        raise InputError(spec.path, "plant.model", f"{spec.plant.model}: patchgen {command} takes the "
+                         f"{' or '.join(plants)} so far (the rotary pendulum is designed, with patchgen design; its "
+                         "patch, bench and checks are to come)")
     name, source, field = (bench, bench_source_name, "") if bench is not None else (spec.bench, spec.path, "bench")
     profile = load_bench(name, source, field)
+    if profile.plant != spec.plant.model:
+        raise InputError(bench_source(name, source, field), "plant", f"is a {profile.plant} bench; the spec "
+                         f"{spec.path} is a {spec.plant.model}'s")
     check_reads(profile, spec.sensors.read(), bench_source(name, source, field))
     if machine is None:
         return Inputs(spec, load_machine(spec.machine, spec.path), profile)

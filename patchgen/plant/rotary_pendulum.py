@@ -6,7 +6,7 @@ questions.
 A DC motor turns an arm about a vertical axis; at the arm's tip a pendulum swings about the arm's
 own axis. The equations are patchgen.plant.rotary_equations (numpy) and
 patchgen.plant.rotary_compiled (numba); a QUBE-Servo 2's figures are patchgen.plant.qube_servo2.
-The rotary pendulum is not yet wired into the design, patch or bench layers (docs/plants.md).
+patchgen.plant.plant_model gathers these for the layers above (ROTARY).
 """
 
 from __future__ import annotations
@@ -31,8 +31,10 @@ ANGLE = "theta"  # the state whose excursion past the fall angle ends a run
 RATE_OF = {"alpha": "alpha_dot", "theta": "theta_dot"}  # each position-like state's rate
 POSITION_OF = {rate: position for position, rate in RATE_OF.items()}  # the position a rate is the rate of
 # What the bench's sensors read: an encoder on the motor's shaft and one at the pendulum's pivot.
-# No tachometer: both rates are the patch's to find (differentiators or an estimator)
+# No tachometer: both rates are the patch's to find (differentiators or an estimator). A bench with
+# a tachometer on the motor may read the arm's rate too (MEASURABLE)
 MEASURED = (POSITION, ANGLE)
+MEASURABLE = (POSITION, ANGLE, RATE_OF[POSITION])
 ESTIMATED_RATES = (RATE_OF[POSITION], RATE_OF[ANGLE])
 SENSOR_LABELS = dict(zip(MEASURED, ("arm encoder", "pendulum encoder")))
 
@@ -60,7 +62,7 @@ PARAMETERS = (
     Parameter("J_p", "kg m^2", 0, 10, None, "pendulum's moment of inertia about its centre of mass, across "
               "the rod, kg m^2 (left out: m_p L_p^2 / 12, a uniform rod; none about its own long axis)"),
     Parameter("alpha_limit", "rad", 0.1, math.inf, math.inf, "the arm angle either way past which the "
-              "pendulum encoder's cable winds up, rad (inf: a slip ring, nothing winds up)", uncertain=False),
+              "pendulum encoder's cable winds up, rad (left out: a slip ring, nothing winds up)", uncertain=False),
 )
 PARAMETER_NAMES = tuple(p.name for p in PARAMETERS)
 FROM_ROD = ("l_r", "J_r", "l_p", "J_p")  # no default number: a uniform rod's when left out

@@ -4,18 +4,18 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, create_model, field_validator
 
-from patchgen.inputs.drive_fields import DriveFields, derived, k_u_field, k_u_of, motor_of
+from patchgen.inputs.drive_fields import DERIVED_TOL, DriveFields, derived, k_u_field, k_u_of, motor_of
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Real, bounded, zero_or_at_least
 from patchgen.inputs.resources import folder, resolve
 from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.validation import load_profile, validate
-from patchgen.plant.cart_pendulum import MEASURED
 from patchgen.plant.drive import INDUCTANCE
+from patchgen.plant.plant_model import CART, DEFAULT, PLANT_MODELS, ROTARY, PlantModel
 from patchgen.profiles.uncertainty import RANGE_FIELDS, BenchUncertainty, range_problem
 
 
@@ -77,35 +77,59 @@ class VelocityFilter(InputModel):
     zeta: Real = bounded(0.05, 10)
 
 
-class BenchSensors(InputModel):
-    """Sensor constants (V per SI unit), their noise, and how each is measured: an encoder's
-    counts (per metre for a distance, per revolution for an angle), a velocity through a filter
-    of its position's reading (none stated: a tachometer, read directly)."""
+class Sensors(InputModel):
+    """A bench's sensors (one table per plant model, made by ``_sensor_table``)."""
 
-    s: Real = bounded(1e-3, 1e3)
-    theta: Real = bounded(1e-3, 1e3)
-    s_dot: Real | None = bounded(1e-3, 1e3, default=None, description="V/(m/s); none: the bench has no velocity "
-                                 "signal (no tachometer, no filter), and a patch finds s_dot from s")
-    noise_V_rms: dict[Literal[MEASURED], Annotated[Real, Field(ge=0, le=100)]] = Field(
-        default_factory=dict)
-    noise_bandwidth_Hz: Real = bounded(1e-3, 1e9, default=200.0)
-    counts_per_m: dict[Literal["s"], Annotated[Real, Field(ge=1, le=1e9)]] = Field(
-        default_factory=dict, description="an encoder's counts per metre of a distance it reads")
-    counts_per_rev: dict[Literal["theta"], Annotated[Real, Field(ge=4, le=1e9)]] = Field(
-        default_factory=dict, description="an encoder's counts per revolution of an angle it reads (quadrature "
-                                          "counts: 4 x the lines)")
-    velocity_filter: dict[Literal["s_dot"], VelocityFilter] = Field(
-        default_factory=dict, description="a velocity from a filter of its position's reading, not a tachometer")
+    plant_model: ClassVar[PlantModel]
 
     def quanta(self) -> dict[str, float]:
         """Each encoder-read quantity's count in SI units (m, rad)."""
-        out = {q: 1.0 / n for q, n in self.counts_per_m.items()}
+        out = {q: 1.0 / n for q, n in getattr(self, "counts_per_m", {}).items()}
         out.update({q: 2.0 * math.pi / n for q, n in self.counts_per_rev.items()})
         return out
 
     def filters(self) -> dict[str, VelocityFilter]:
         """The velocities read through a filter, by quantity."""
         return dict(self.velocity_filter)
+
+
+def _sensor_table(plant: PlantModel, class_name: str):
+    """The ``[sensors]`` table of a bench of ``plant``: a constant per quantity its sensors may
+    read (a rate's optional: none, no signal), their noise, the encoders' counts (per metre of a
+    distance, per revolution of an angle) and the velocities read through a filter."""
+    units = plant.units
+    rates = tuple(q for q in plant.measurable if q in plant.position_of)
+    fields = {}
+    for q in plant.measurable:
+        if q in rates:
+            fields[q] = (Real | None, bounded(1e-3, 1e3, default=None, description=(
+                f"V/({units[q]}); none: the bench has no velocity signal (no tachometer, no filter), and a patch "
+                f"finds {q} from {plant.position_of[q]}")))
+        else:
+            fields[q] = (Real, bounded(1e-3, 1e3))
+    fields["noise_V_rms"] = (dict[Literal[plant.measurable], Annotated[Real, Field(ge=0, le=100)]],
+                             Field(default_factory=dict))
+    fields["noise_bandwidth_Hz"] = (Real, bounded(1e-3, 1e9, default=200.0))
+    distances = tuple(q for q in plant.rate_of if units[q] == "m")
+    angles = tuple(q for q in plant.rate_of if units[q] == "rad")
+    if distances:
+        fields["counts_per_m"] = (dict[Literal[distances], Annotated[Real, Field(ge=1, le=1e9)]], Field(
+            default_factory=dict, description="an encoder's counts per metre of a distance it reads"))
+    fields["counts_per_rev"] = (dict[Literal[angles], Annotated[Real, Field(ge=4, le=1e9)]], Field(
+        default_factory=dict, description="an encoder's counts per revolution of an angle it reads (quadrature "
+                                          "counts: 4 x the lines)"))
+    fields["velocity_filter"] = (dict[Literal[rates], VelocityFilter], Field(
+        default_factory=dict, description="a velocity from a filter of its position's reading, not a tachometer"))
+    table = create_model(class_name, __base__=Sensors, __module__=__name__,
+                         __doc__="Sensor constants (V per SI unit), their noise, and how each is measured: an "
+                                 "encoder's counts, a velocity through a filter of its position's reading (none "
+                                 f"stated: a tachometer, read directly); of {plant.what}.", **fields)
+    table.plant_model = plant
+    return table
+
+
+BenchSensors = _sensor_table(CART, "BenchSensors")
+RotaryBenchSensors = _sensor_table(ROTARY, "RotaryBenchSensors")
 
 
 # Random forces on the plant while it balances, when a bench profile does not state its own. No
@@ -115,6 +139,9 @@ class BenchSensors(InputModel):
 ASSUMED_CART_FORCE_N_RMS = 0.1  # N: cable drag, track and belt irregularities
 ASSUMED_TIP_FORCE_N_RMS = 0.01  # N: air currents, about a third of a degree of lean on table B.1's pendulum
 ASSUMED_FORCE_BANDWIDTH_HZ = 5.0  # Hz: slow, as drafts and drag are
+# N m on a rotary pendulum's arm: cable drag, a tenth of what a QUBE-Servo 2's motor gives at 1 V
+# (k_t / R_m = 5 mN m/V); its pendulum is a tenth of table B.1's in length, so a tenth of the tip force
+ASSUMED_ARM_TORQUE_NM_RMS = 5e-4
 
 
 class BenchDisturbance(InputModel):
@@ -147,6 +174,8 @@ class BenchProfile(InputModel):
 
     id: str = Field(min_length=1)
     name: str
+    plant: Literal[CART.name] = Field(CART.name, description="the plant model the bench carries: "
+                                      + ", ".join(PLANT_MODELS))
     actuator: BenchActuator
     sensors: BenchSensors
     track: BenchTrack = BenchTrack()
@@ -158,6 +187,72 @@ class BenchProfile(InputModel):
         default_factory=list, max_length=50,
         description="the scenarios this bench is judged in (shipped names, or files, a relative path read "
                     "beside the profile first); none: every shipped one (STANDARD_SCENARIOS)")
+
+
+def _input_limit(value, info):
+    """A rotary bench's input limit: its amplifier's V_limit (given again, it must agree)."""
+    limit = info.data.get("V_limit")
+    if limit is None or value is None:
+        return limit if value is None else value
+    if not math.isclose(value, limit, rel_tol=DERIVED_TOL):
+        raise ValueError(f"is the amplifier's V_limit on a rotary bench ({limit:g} V): leave it out (got {value:g})")
+    return limit
+
+
+class RotaryBenchActuator(BenchActuator):
+    """The amplifier that drives a rotary pendulum's motor (its motor is the plant's): motor volts
+    per command volt K_U (V/V), an optional lag and dead zone, and the volts it can give, V_limit.
+    The plant's input is the motor's voltage, so its limit (force_limit_N's place) is V_limit."""
+
+    model: Literal["gain", "lag"] = "gain"
+    K_U: Real | None = k_u_field("V/V: motor volts per command volt")
+    V_limit: Real = bounded(1e-3, 1e4, description="the amplifier's output limit, motor volts")
+    force_limit_N: Real | None = Field(None, gt=0, le=1e4, validate_default=True,
+                                       description="the plant input's limit: V_limit, motor volts")
+
+    limit_check = field_validator("V_limit", mode="after")(lambda v: v)
+    force_check = field_validator("force_limit_N", mode="after")(_input_limit)
+
+
+class RotaryDisturbance(InputModel):
+    """Random forces on a rotary pendulum (rms over a flat band from 0 to bandwidth_Hz): a torque
+    on the arm about the motor's axis, and a force at the pendulum's tip across it."""
+
+    arm_torque_Nm_rms: Real = bounded(0, 1e2, default=ASSUMED_ARM_TORQUE_NM_RMS)
+    tip_force_N_rms: Real = bounded(0, 1e3, default=ASSUMED_TIP_FORCE_N_RMS / 10)
+    bandwidth_Hz: Real = bounded(1e-3, 1e4, default=ASSUMED_FORCE_BANDWIDTH_HZ)
+
+
+NO_TRACK = BenchTrack(limit_switches=False)  # a rotary bench's: no switches, no watchdog
+
+
+class RotaryBenchProfile(BenchProfile):
+    """A rotary pendulum's bench (``plant = "rotary-pendulum"``): its amplifier, its encoders, the
+    forces on it. It has no track: the arm's limit is the plant's (alpha_limit, the cable)."""
+
+    plant: Literal[ROTARY.name]
+    actuator: RotaryBenchActuator
+    sensors: RotaryBenchSensors
+    disturbance: RotaryDisturbance = RotaryDisturbance()
+    track: BenchTrack = Field(NO_TRACK, description="none: a rotary bench has no track")
+
+    @field_validator("track", mode="after")
+    @classmethod
+    def _no_track(cls, value: BenchTrack) -> BenchTrack:
+        if value != NO_TRACK:
+            raise ValueError("a rotary pendulum has no track: the arm's limit is the spec's [plant] alpha_limit")
+        return value
+
+
+BENCH_TYPES = {CART.name: BenchProfile, ROTARY.name: RotaryBenchProfile}  # a profile's type, by its plant
+
+
+def bench_type(document: dict, label: str) -> type[BenchProfile]:
+    """The profile type of a parsed bench file, by its ``plant`` (the cart-pendulum when left out)."""
+    name = document.get("plant", DEFAULT)
+    if not isinstance(name, str) or name not in BENCH_TYPES:
+        raise InputError(label, "plant", f"unknown plant model {name!r} (known: {', '.join(BENCH_TYPES)})")
+    return BENCH_TYPES[name]
 
 
 STANDARD_SCENARIOS = ("offset-10deg", "finger-push", "step-cart", "hold-120s")  # the shipped set
@@ -204,7 +299,7 @@ def load_bench(name_or_path: str, source: str = "", field: str = "bench") -> Ben
     BenchProfile
         The checked profile; a bad value raises InputError naming the profile file and field.
     """
-    bench = load_profile(BenchProfile, name_or_path, "bench", source, field, check=check_bench)
+    bench = load_profile(bench_type, name_or_path, "bench", source, field, check=check_bench)
     return _scenarios_found(bench, resolve("bench", name_or_path, source, field))
 
 
@@ -316,6 +411,6 @@ def check_bench(bench: BenchProfile, source: str) -> None:
                              "needs a lag")
         for end, v in (("low", lo), ("high", hi)):
             try:
-                validate(BenchProfile, bench_at(bench, {key: v}).model_dump(), source)
+                validate(type(bench), bench_at(bench, {key: v}).model_dump(), source)
             except InputError as exc:
                 raise InputError(source, field, f"{end} end {v:g}: {exc.field} {exc.message}") from None

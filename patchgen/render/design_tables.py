@@ -58,11 +58,13 @@ def print_design(d: Design, console: Console | None = None) -> None:
     console.print(f"[bold]{spec.name}[/bold]  {spec.description}")
     if spec.source:
         console.print(f"source: {spec.source}")
-    console.print(f"actuator model (design): {spec.actuator.model}, K_U = {spec.actuator.K_U} N/V"
+    plant = spec.plant_model
+    console.print(f"actuator model (design): {spec.actuator.model}, K_U = {spec.actuator.K_U} {plant.input_unit}/V"
                   + (f", tau = {spec.actuator.tau} s" if spec.actuator.model != "gain" else ""))
     for note in design_notes(d):
         console.print(f"[yellow]note:[/yellow] {note}")
-    g = table("LQR gain (u = -K x, force in N)", text("state"), number("Q"), number("K"))
+    g = table(f"LQR gain (u = -K x, {plant.input_noun} in {plant.input_unit})", text("state"), number("Q"),
+              number("K"))
     cut = []
     for i, s in enumerate(d.states):
         gain, flagged = gain_text(float(d.K[0, i]), float(d.spread.K[0, i]), REPORT_DIGITS)

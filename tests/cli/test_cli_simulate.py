@@ -15,6 +15,7 @@ from patchgen.patch.build import build_patch
 from patchgen.profiles.bench import load_bench
 from tests.cli_run import run_patchgen
 from tests.conftest import ROOT, design_from_path, design_path
+from tests.shipped import patched_designs
 
 pytestmark = pytest.mark.heavy(7)  # seconds, roughly: see tests/conftest.py
 
@@ -64,7 +65,7 @@ def test_bad_scenario_field_one_line(tmp_path):
 
 
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
-@pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "designs").glob("*.toml")))
+@pytest.mark.parametrize("name", patched_designs())
 def test_spice_ideal_agrees_within_one_percent(tmp_path, name):
     # the ideal run does not clip: a scenario in which the patch stays inside the reference (a patch
     # of Quanser's own weights asks 33 V from 10 deg and leaves it; a tap on its bench does not)

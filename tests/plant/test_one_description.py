@@ -13,11 +13,14 @@ from pathlib import Path
 import pytest
 
 import patchgen
-from patchgen.inputs.spec import PlantSpec
+from patchgen.inputs.spec import PlantSpec, RotaryPlantSpec
+from patchgen.plant import rotary_pendulum
 from patchgen.plant.cart_pendulum import PARAMETER_NAMES, PARAMETERS, STATE_NAMES, UNCERTAIN
 from patchgen.plant.compiled import PLANT_VECTOR, VECTOR_PARAMETERS, plant_vector
 from patchgen.plant.drive import MOTOR_PARAMETER_NAMES
 from patchgen.plant.equations import PlantParams
+from patchgen.plant.plant_model import CART, PLANT_MODELS, ROTARY
+from patchgen.plant.rotary_equations import RotaryParams
 
 PKG = Path(patchgen.__file__).parent
 KNOWN: dict[str, tuple[int, str]] = {}  # module -> (how many, where they belong): none left
@@ -37,7 +40,8 @@ def _lists_of_names() -> list[tuple[str, int, str]]:
                 continue
             words = {x.value for x in items if isinstance(x, ast.Constant) and isinstance(x.value, str)}
             for which, names in (("states", STATE_NAMES), ("parameters", PARAMETER_NAMES),
-                                 ("motor", MOTOR_PARAMETER_NAMES)):
+                                 ("motor", MOTOR_PARAMETER_NAMES), ("states", rotary_pendulum.STATE_NAMES),
+                                 ("parameters", rotary_pendulum.PARAMETER_NAMES)):
                 if len(words & set(names)) >= 3:
                     found.append((rel, node.lineno, which))
     return found
@@ -66,15 +70,26 @@ def test_the_walk_finds_a_list_written_out_again(tmp_path, monkeypatch):
                      ("design/_probe_states.py", 3, "motor")]
 
 
-def test_the_spec_s_plant_table_is_the_plant_model_s_parameters():
-    schema = PlantSpec.model_json_schema()
-    assert tuple(schema["properties"]) == PARAMETER_NAMES
-    for p in PARAMETERS:
+@pytest.mark.parametrize("table, plant, params", [(PlantSpec, CART, PlantParams),
+                                                   (RotaryPlantSpec, ROTARY, RotaryParams)])
+def test_the_spec_s_plant_table_is_the_plant_model_s_parameters(table, plant, params):
+    schema = table.model_json_schema()
+    assert tuple(schema["properties"]) == ("model",) + plant.parameter_names
+    assert schema["properties"]["model"]["const"] == plant.name and set(PLANT_MODELS) == {"cart-pendulum",
+                                                                                         "rotary-pendulum"}
+    for p in plant.parameters:
         field = schema["properties"][p.name]
-        assert (field["minimum"], field["maximum"], field.get("default")) == (p.lo, p.hi, p.default)
+        if "anyOf" in field:  # a figure that may be left out: its bounds on the number
+            bounds = next(a for a in field["anyOf"] if a["type"] == "number")
+            lo, hi = bounds["ge"], bounds["le"]
+        else:  # an infinite bound is left out of the schema
+            lo, hi = field["minimum"], field.get("maximum", float("inf"))
+        assert (lo, hi, field.get("default")) == (p.lo, p.hi, p.default)
         assert field["description"] == p.what
-    assert set(schema["required"]) == {p.name for p in PARAMETERS if p.default is None}
-    assert tuple(PlantParams.__dataclass_fields__) == PARAMETER_NAMES
+    assert set(schema["required"]) == {p.name for p in plant.parameters
+                                       if p.default is None and p.name not in plant.optional}
+    assert tuple(params.__dataclass_fields__) == plant.parameter_names
+    assert plant.parameters == (PARAMETERS if plant is CART else rotary_pendulum.PARAMETERS)
 
 
 @pytest.mark.parametrize("seed", range(3))

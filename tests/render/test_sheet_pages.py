@@ -55,10 +55,10 @@ def printed(chromium, tmp_path_factory):
 
 
 def test_the_readme_lists_every_shipped_design_that_fits_on_both_machines():
-    from patchgen.inputs.resources import shipped
+    from tests.shipped import patched_designs
 
     listed = {name for name, _ in PAGES}
-    assert set(shipped("design")) - listed == {"thesis-case1-noint"}
+    assert set(patched_designs()) - listed == {"thesis-case1-noint"}
     assert "needs more pots than\neither machine has" in (ROOT / "README.md").read_text()
     assert patch_files_of("thesis-case1-noint", "gp6") is None and patch_files_of("thesis-case1-noint",
                                                                                  "the-analog-thing") is None

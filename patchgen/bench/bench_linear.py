@@ -17,9 +17,10 @@ import numpy as np
 from patchgen.bench.circuit import sensor_constants
 from patchgen.inputs.drive_fields import LAG_MODELS, motor_of
 from patchgen.patch.netlist import Netlist
-from patchgen.plant.cart_pendulum import POSITION, POSITION_OF, RATE_OF
 from patchgen.plant.drive import driven, with_rotor
-from patchgen.plant.equations import PLANT_STATES, PlantParams, linear_matrices
+from patchgen.plant.equations import PlantParams
+from patchgen.plant.plant_model import model_of
+from patchgen.plant.rotary_equations import RotaryParams
 from patchgen.profiles.bench import BenchProfile
 
 
@@ -48,15 +49,16 @@ def actuator_lag(bench: BenchProfile) -> float | None:
     return act.tau if act.model in LAG_MODELS and act.tau > 0 else None
 
 
-def bench_plant(net: Netlist, plant: PlantParams, bench: BenchProfile, lagged: bool = True) -> BenchPlant:
+def bench_plant(net: Netlist, plant: PlantParams | RotaryParams, bench: BenchProfile,
+                lagged: bool = True) -> BenchPlant:
     """The bench from u_c to the patch's sensor voltages, linearised about upright.
 
     Parameters
     ----------
     net : Netlist
         The patch: which sensors it reads.
-    plant : PlantParams
-        The plant's mechanism (the drive is the bench's).
+    plant : PlantParams or RotaryParams
+        The plant's mechanism (a cart's drive is the bench's; a rotary arm's motor is its own).
     bench : BenchProfile
         Actuator (gain, lag, motor), sensor constants and filters.
     lagged : bool
@@ -76,25 +78,27 @@ def bench_plant(net: Netlist, plant: PlantParams, bench: BenchProfile, lagged: b
         plant, emf = with_rotor(plant, motor), motor.back_emf_damping()  # the back-EMF acts inside the lag
     elif motor is not None:
         plant = driven(plant, motor)
-    Ap, Bp = linear_matrices(plant)
+    pm = model_of(plant)
+    Ap, Bp = pm.linear(plant)
+    states, n_p = pm.state_names, len(pm.states)
     filters = bench.sensors.filters()
     order = sorted(filters)
     na = 0 if lag is None else 1
-    n = 4 + na + 2 * len(order)
+    n = n_p + na + 2 * len(order)
     A, B = np.zeros((n, n)), np.zeros((n, 1))
-    A[:4, :4] = Ap
+    A[:n_p, :n_p] = Ap
     if lag is None:
-        B[:4] = Bp * K_U
+        B[:n_p] = Bp * K_U
     else:  # F' = (K_U u_c - b s_dot - F) / lag
-        A[:4, 4:5] = Bp
-        A[4, 4] = -1.0 / lag
-        A[4, PLANT_STATES.index(RATE_OF[POSITION])] = -emf / lag
-        B[4, 0] = K_U / lag
-    names = list(PLANT_STATES) + ([] if lag is None else ["actuator"])
+        A[:n_p, n_p:n_p + 1] = Bp
+        A[n_p, n_p] = -1.0 / lag
+        A[n_p, states.index(pm.rate_of[pm.position])] = -emf / lag
+        B[n_p, 0] = K_U / lag
+    names = list(states) + ([] if lag is None else ["actuator"])
     for k, q in enumerate(order):  # y'' = wn^2 (x - y) - 2 zeta wn y'; the reading is y'
-        f, i = filters[q], 4 + na + 2 * k
+        f, i = filters[q], n_p + na + 2 * k
         A[i, i + 1] = 1.0
-        A[i + 1, PLANT_STATES.index(POSITION_OF[q])] = f.wn_rad_s ** 2
+        A[i + 1, states.index(pm.position_of[q])] = f.wn_rad_s ** 2
         A[i + 1, i] = -f.wn_rad_s ** 2
         A[i + 1, i + 1] = -2.0 * f.zeta * f.wn_rad_s
         names += [f"{q} filter", f"{q} filter rate"]
@@ -102,6 +106,6 @@ def bench_plant(net: Netlist, plant: PlantParams, bench: BenchProfile, lagged: b
     C = np.zeros((len(ids), n))
     for r, (sensor, gain) in enumerate(zip(net.sensors, sensor_constants(net, bench))):
         q = sensor.quantity
-        col = 4 + na + 2 * order.index(q) + 1 if q in filters else PLANT_STATES.index(q)
+        col = n_p + na + 2 * order.index(q) + 1 if q in filters else states.index(q)
         C[r, col] = gain
     return BenchPlant(A, B, C, tuple(names), ids, lag)

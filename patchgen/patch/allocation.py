@@ -29,7 +29,7 @@ from patchgen.inputs.errors import ResourceError
 from patchgen.patch import large_gains, polarity, time_scales
 from patchgen.patch.jacks import jacks_test, weight_for
 from patchgen.patch.netlist import AmpInput, Amplifier, ControlOutput, Mode, Netlist, Pot, SensorInput, Signal
-from patchgen.patch.realization import SENSOR_UNITS, Block, Realization, Term
+from patchgen.patch.realization import Block, Realization, Term
 from patchgen.profiles.machine import MachineProfile, the_machine
 
 ROLE = {"sum": "summer", "integrate": "integrator", "differentiate": "differentiator", "lag": "lag"}
@@ -270,7 +270,7 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
           notes: list[str], wanted: dict[tuple[str, str, float], float], source: str) -> Netlist:
     slot = _assign_slots(stages, machine, source)
     res = machine.pot_resolution
-    sensors = [SensorInput(id=s, label=real.label(s), quantity=s, unit=SENSOR_UNITS[s], volts_per_unit=v)
+    sensors = [SensorInput(id=s, label=real.label(s), quantity=s, unit=real.unit(s), volts_per_unit=v)
                for s, v in real.sensors.items()]
     blocks = {b.name: b for b in real.blocks}
 
@@ -323,8 +323,8 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
             part = whole.partial_scale if st.key.startswith("pre:") else 1.0
             vpu, unit = whole.volts_per_unit * part, whole.unit
         else:  # a sensor's inverter, at its gain
-            vpu, unit = real.sensors[st.out_signal] * real.inverter_gains.get(st.out_signal, 1.0), SENSOR_UNITS[
-                st.out_signal]
+            vpu, unit = real.sensors[st.out_signal] * real.inverter_gains.get(st.out_signal, 1.0), real.unit(
+                st.out_signal)
         purpose = (b.purpose if b is not None else
                    f"partial sum for {st.out_signal} (terms needing the other sign)" if st.key.startswith("pre:")
                    else f"inverts {st.out_signal}")
@@ -340,7 +340,8 @@ def _emit(real: Realization, machine: MachineProfile, stages: list[_Stage], P: d
                               tau_s=b.tau_s if b is not None else None, purpose=purpose))
     ints = [a.id for a in amps if a.role in ("integrator", "lag")]
     operation = machine.procedure.steps("operation", machine=machine.name, units=machine.units, resolution=res,
-                                        reference_V=machine.reference_V, integrators=tuple(ints), signs=False)
+                                        reference_V=machine.reference_V, integrators=tuple(ints), signs=False,
+                                        plant=real.plant)
     return Netlist(design=real.design_name, machine=machine.id, machine_name=machine.name,
                    reference_V=machine.reference_V, time_scale_s=machine.time_scale_s,
                    pot_resolution=res, sensors=sensors, amplifiers=amps, pots=pots,

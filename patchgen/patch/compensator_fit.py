@@ -31,6 +31,7 @@ from patchgen.patch.compensator_forms import (
     FormSystem,
     coefficient_range,
     excursion_peaks,
+    excursions,
     form_system,
     peaks,
     realize_compensator,
@@ -181,7 +182,7 @@ def amplifier_peaks(design: Design, net: Netlist) -> dict[str, float]:
     for Ap, Bp, Cp, names in scaling_plants(design):
         Acl = np.block([[Ap + Bp @ (KU * law.Dc) @ ks @ Cp, Bp @ (KU * law.Cc)], [law.Bc @ ks @ Cp, law.Ac]])
         rows = np.vstack([np.hstack([la.Dc @ ks @ Cp, la.Cc]) for la in outs.values()])
-        p = excursion_peaks(Acl, rows, [names.index(s) for s in ("theta", "s")])
+        p = excursion_peaks(Acl, rows, excursions(design, names))
         peak = {a: max(peak[a], float(v)) for a, v in zip(outs, p)}
     return peak
 

@@ -34,14 +34,12 @@ from patchgen.design.compensator import Compensator
 from patchgen.design.lqg import Design
 from patchgen.patch import large_gains
 from patchgen.patch.realization import Block, Realization, Term
-from patchgen.plant.equations import PLANT_STATES, linear_matrices
 from patchgen.profiles.machine import MachineProfile
 
 FORMS = ("modal", "observer", "balanced")
 AMPLITUDE = 0.5  # a state's peak over the scaling excursions, as a fraction of the reference
 EXACT_SPAN = 4.0  # the most a state's voltage is lowered to make a coefficient an exact weight
 SCALING_THETA0_RAD = math.radians(10.0)  # offset-10deg, the shipped scenario with the largest angle
-SCALING_S0_M = 0.2  # step-cart's 0.2 m step, as an initial cart offset
 SCALING_HORIZON_S = 10.0  # long enough for every scenario's transient to settle (shipped sims: 10 s)
 SCALING_STEP_S = 0.005
 EXCURSION_CHUNK = 250  # steps between excursion_peaks' divergence tests (a speed choice only)
@@ -122,10 +120,11 @@ def scaling_plants(design: Design) -> list[tuple[np.ndarray, np.ndarray, np.ndar
     model = design.model
     keep = [i for i, s in enumerate(model.states) if not s.startswith("int_")]
     out = [(model.A[np.ix_(keep, keep)], model.B[keep], model.C[:, keep], [model.states[i] for i in keep])]
-    if len(keep) > 4:
-        Ap, Bp = linear_matrices(design.plant)
-        Cp = np.zeros((len(model.measured), 4))
-        names = list(PLANT_STATES)
+    plant = design.spec.plant_model
+    if len(keep) > len(plant.states):
+        Ap, Bp = plant.linear(design.plant)
+        Cp = np.zeros((len(model.measured), len(plant.states)))
+        names = list(plant.state_names)
         for r, m in enumerate(model.measured):
             Cp[r, names.index(m)] = 1.0
         out.append((Ap, Bp, Cp, names))
@@ -137,7 +136,8 @@ def peaks(design: Design, c: Compensator, fs: FormSystem) -> tuple[float, np.nda
 
     The closed loop of each scaling plant (:func:`scaling_plants`) and the compensator (integral
     state and stable part in the form's coordinates) from theta = SCALING_THETA0_RAD and,
-    separately, from s = SCALING_S0_M, sampled every SCALING_STEP_S for SCALING_HORIZON_S.
+    separately, from the position at the plant's step (PlantModel.step), sampled every
+    SCALING_STEP_S for SCALING_HORIZON_S.
     """
     m = fs.A.shape[0]
     ni = 0 if c.R is None else 1
@@ -151,21 +151,27 @@ def peaks(design: Design, c: Compensator, fs: FormSystem) -> tuple[float, np.nda
             [np.vstack([R @ Cp, fs.B @ Cp]), sla.block_diag(np.zeros((ni, ni)), fs.A)],
         ])
         Cout = np.hstack([np.zeros((ni + m, n)), np.eye(ni + m)])
-        peak = np.maximum(peak, excursion_peaks(Acl, Cout, [names.index(s) for s in ("theta", "s")]))
+        peak = np.maximum(peak, excursion_peaks(Acl, Cout, excursions(design, names)))
     return (float(peak[0]) if ni else 0.0), peak[ni:]
 
 
-def excursion_peaks(Acl: np.ndarray, Cout: np.ndarray, where: list[int]) -> np.ndarray:
-    """The largest |Cout x| of the closed loop x' = Acl x released from SCALING_THETA0_RAD on state
-    ``where[0]`` and, separately, from SCALING_S0_M on state ``where[1]``, sampled every
-    SCALING_STEP_S for SCALING_HORIZON_S (a run that diverges, past 1e12 or not finite, is taken
-    up to and including its first such sample)."""
+def excursions(design: Design, names: list[str]) -> list[tuple[int, float]]:
+    """The releases a patch is scaled over, as (state index in ``names``, initial value): the
+    pendulum from SCALING_THETA0_RAD, and the position from the plant's step (the cart's 0.2 m)."""
+    plant = design.spec.plant_model
+    return [(names.index(plant.angle), SCALING_THETA0_RAD), (names.index(plant.position), plant.step)]
+
+
+def excursion_peaks(Acl: np.ndarray, Cout: np.ndarray, where: list[tuple[int, float]]) -> np.ndarray:
+    """The largest |Cout x| of the closed loop x' = Acl x released from each (state, value) of
+    ``where`` separately (``excursions``), sampled every SCALING_STEP_S for SCALING_HORIZON_S (a run
+    that diverges, past 1e12 or not finite, is taken up to and including its first such sample)."""
     Phi = sla.expm(Acl * SCALING_STEP_S)
     steps = int(round(SCALING_HORIZON_S / SCALING_STEP_S))
     peak = np.zeros(Cout.shape[0])
     xs = np.empty((steps, Acl.shape[0]))
     dot = np.dot
-    for i, value in zip(where, (SCALING_THETA0_RAD, SCALING_S0_M)):
+    for i, value in where:
         x = np.zeros(Acl.shape[0])
         x[i] = value
         done = 0
@@ -290,11 +296,12 @@ def realize_compensator(design: Design, c: Compensator, form: str, machine: Mach
     blocks.append(Block("u_c", "sum", tuple(uterms), 1.0, "V", "control voltage to the servo amplifier"))
     if staged:
         blocks = staged_blocks(blocks, max(weights) * machine.pot_max, machine.pot_resolution)
+    plant = spec.plant_model
     notes = (f"compensator realised as one system: {c.method}, {c.order} states, {form} form; each state "
              f"scaled to at most {AMPLITUDE:g} of the reference over a {math.degrees(SCALING_THETA0_RAD):g} deg "
-             f"release and a {SCALING_S0_M:g} m cart offset",)
+             f"release and a {plant.step:g} {plant.units[plant.position]} {plant.body} offset",)
     return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, notes,
-                       dict(spec.sensors.labels))
+                       dict(spec.sensors.labels), plant=spec.plant_model)
 
 
 def staged_blocks(blocks: list[Block], top: float, resolution: float) -> list[Block]:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from patchgen.patch.realization import SENSOR_UNITS, Block, Realization, Term
+from patchgen.patch.realization import Block, Realization, Term
 from patchgen.profiles.machine import MachineProfile
 
 
@@ -48,7 +48,7 @@ def without_differentiators(real: Realization, machine: MachineProfile) -> Reali
         lag = f"{r.name}_lag"
         src = r.terms[0].signal
         vpu = real.sensors[src] if src in real.sensors else real.block(src).volts_per_unit
-        z = Block(lag, "integrate", (Term(r.name, T / roll),), vpu, SENSOR_UNITS.get(src, r.unit),
+        z = Block(lag, "integrate", (Term(r.name, T / roll),), vpu, real.unit(src) if src in real.sensors else r.unit,
                   f"lag of {src} ({roll:g} s) for {r.name}: z' = ({src} - z) / rolloff", settles=True)
         d = Block(r.name, "sum", r.terms + (Term(lag, -1.0),), r.volts_per_unit / gain, r.unit,
                   f"{r.purpose}; no differentiator element: {src} minus its lag, the rate / {gain:.4g}")

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-from patchgen.patch.realization import SENSOR_UNITS, Block, Realization, Term
+from patchgen.patch.realization import Block, Realization, Term
 from patchgen.profiles.machine import MachineProfile
 
 PREFIX = "x"  # a gain stage's block is named for its signal and gain, e.g. theta_x1.42
@@ -78,7 +78,7 @@ def gain_stages(real: Realization, kept: dict[str, list[Term]],
     stages, notes = [], []
     for sig, g in sorted(need.items()):
         name = f"{sig}_{PREFIX}{g:.3g}"
-        vpu, unit = ((real.sensors[sig], SENSOR_UNITS[sig]) if sig in real.sensors
+        vpu, unit = ((real.sensors[sig], real.unit(sig)) if sig in real.sensors
                      else (blocks[sig].volts_per_unit, blocks[sig].unit))
         stages.append(Block(name, "sum", (Term(sig, g),), vpu * g, unit,
                             f"{sig} times {g:.4g}: a gain stage for a coefficient above {top:g}"))

@@ -24,12 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from patchgen.design.lqg import Design
-from patchgen.plant.cart_pendulum import MEASURED, POSITION_OF, SENSOR_LABELS
-from patchgen.plant.cart_pendulum import STATE_UNITS as PLANT_UNITS
+from patchgen.plant.plant_model import CART, PlantModel
 from patchgen.profiles.machine import MachineProfile
-
-STATE_UNITS = {**PLANT_UNITS, "int_s": "m s", "int_theta": "rad s", "actuator": "N"}
-SENSOR_UNITS = {k: STATE_UNITS[k] for k in MEASURED}
 
 
 @dataclass(frozen=True)
@@ -78,10 +74,16 @@ class Realization:
     labels: dict[str, str] = field(default_factory=dict)  # sensor id -> what reads it, where the spec says
     inverter_gains: dict[str, float] = field(default_factory=dict)  # sensor id -> the gain its inverter (where
     # the allocation needs one) takes it at, its consumers taking the inverter 1 / gain times (signal-to-noise)
+    plant: PlantModel = CART  # whose sensors and states the law reads
 
     def label(self, sensor: str) -> str:
-        """What reads a sensor, as the sheet names it: the spec's word, else the thesis bench's instrument."""
-        return self.labels.get(sensor, SENSOR_LABELS[sensor])
+        """What reads a sensor, as the sheet names it: the spec's word, else the plant's reference bench's
+        instrument (the thesis's pots and tachometer for the cart)."""
+        return self.labels.get(sensor, self.plant.sensor_labels[sensor])
+
+    def unit(self, signal: str) -> str:
+        """The SI unit of a state or sensor signal."""
+        return self.plant.state_units()[signal]
 
     def block(self, name: str) -> Block:
         return next(b for b in self.blocks if b.name == name)
@@ -97,6 +99,7 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
     blocks: list[Block] = []
     scale: dict[str, float] = dict(ks)  # volts per unit of each state signal on the machine
     states = design.states
+    units = spec.plant_model.state_units()
     sc = spec.actuator.state_scale
     if e == "kalman":
         return _kalman(design, machine, ks, KU, T)
@@ -108,9 +111,9 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
             raise spec.error("estimator.kind", f"{rate} is not measured on the bench: choose "
                              "\"differentiator\", \"filtered_differentiator\", \"reduced_observer\" or "
                              "\"kalman\" to patch this design")
-        roll, pos = design.estimator.rolloff_s, POSITION_OF[rate]
+        roll, pos = design.estimator.rolloff_s, spec.plant_model.position_of[rate]
         scale[rate] = spec.rate_scale(rate)
-        blocks.append(Block(rate, "differentiate", (Term(pos, 1.0),), scale[rate], STATE_UNITS[rate],
+        blocks.append(Block(rate, "differentiate", (Term(pos, 1.0),), scale[rate], units[rate],
                             f"{rate} from {pos} (practical differentiator)" if e == "differentiator" else
                             f"{rate} from {pos} (differentiator, roll-off {roll:g} s chosen from the noise)",
                             T_d_s=scale[rate] / ks[pos], rolloff_s=roll))
@@ -124,13 +127,13 @@ def realize(design: Design, machine: MachineProfile) -> Realization:
         if spec.actuator.model != "lag":
             raise spec.error("actuator.model", "an actuator state with a zero can only be patched with a "
                              "Kalman estimator")
-        blocks.append(lag_block("actuator", (Term("u_c", 1.0),), scale["actuator"], "N",
+        blocks.append(lag_block("actuator", (Term("u_c", 1.0),), scale["actuator"], units["actuator"],
                                 "actuator state from a first-order lag model driven by u_c", tau, T,
                                 integrator_reach(machine)))
     terms = tuple(Term(s, -float(design.K[0, i]) / (scale[s] * KU)) for i, s in enumerate(states))
     blocks.append(Block("u_c", "sum", terms, 1.0, "V", "control voltage to the servo amplifier"))
     return Realization(spec.name, ks, tuple(blocks), KU, spec.patch.below_resolution, tuple(notes),
-                       dict(spec.sensors.labels))
+                       dict(spec.sensors.labels), plant=spec.plant_model)
 
 
 def integrator_reach(machine: MachineProfile) -> float:
@@ -165,10 +168,12 @@ def _integral_blocks(design: Design, ks: dict[str, float], T: float):
     """The integral states as integrators of the sensor voltages (gain 1: volts per unit s equal the
     sensor's), their scales, and a note for each design leak the pure integrator leaves out."""
     blocks, scale, notes = [], {}, []
-    for name, src in (("int_s", "s"), ("int_theta", "theta")):
+    plant = design.spec.plant_model
+    for name, src in (("int_s", plant.position), ("int_theta", plant.angle)):
         if name in design.states:
             scale[name] = ks[src]
-            blocks.append(Block(name, "integrate", (Term(src, T),), ks[src], STATE_UNITS[name], f"integral of {src}"))
+            blocks.append(Block(name, "integrate", (Term(src, T),), ks[src], plant.state_units()[name],
+                                f"integral of {src}"))
             leak = getattr(design.spec.integrators, f"{name}_leak")
             if leak:
                 notes.append(f"{name}: the design's leak of {leak:g} 1/s is not patched (a pure integrator)")
@@ -195,7 +200,8 @@ def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
         terms += [Term(m, T * Lv[i, j]) for j, m in enumerate(model.measured) if Lv[i, j] != 0]
         if Bv[i] != 0:
             terms.append(Term("u_c", T * Bv[i]))
-        blocks.append(Block(f"xhat_{s}", "integrate", tuple(terms), sv[s], STATE_UNITS[s], f"Kalman estimate of {s}"))
+        blocks.append(Block(f"xhat_{s}", "integrate", tuple(terms), sv[s], spec.plant_model.state_units()[s],
+                            f"Kalman estimate of {s}"))
     scale = {f"xhat_{s}": sv[s] for s in est}
     ints, int_scale, notes = _integral_blocks(design, ks, T)
     blocks += ints
@@ -204,7 +210,7 @@ def _kalman(design: Design, machine: MachineProfile, ks, KU, T) -> Realization:
     terms = tuple(Term(sig[s], -float(design.K[0, i]) / (scale[sig[s]] * KU)) for i, s in enumerate(model.states))
     blocks.append(Block("u_c", "sum", terms, 1.0, "V", "control voltage to the servo amplifier"))
     return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, tuple(notes),
-                       dict(spec.sensors.labels))
+                       dict(spec.sensors.labels), plant=spec.plant_model)
 
 
 def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
@@ -240,7 +246,7 @@ def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
                 terms.append(Term(m, _exact(tau * obs.G[i, k] * alpha[s] / ks[m], top)))
         if obs.H[i] != 0:
             terms.append(Term("u_c", _exact(tau * obs.H[i] * alpha[s] * KU, top)))
-        blocks.append(lag_block(f"z_{s}", tuple(terms), alpha[s], STATE_UNITS[s],
+        blocks.append(lag_block(f"z_{s}", tuple(terms), alpha[s], spec.plant_model.state_units()[s],
                                 f"reduced observer: {s} estimate minus its sensor part (pole {obs.pole:g} rad/s)",
                                 tau, T, reach))
     scale = {f"z_{s}": alpha[s] for s in w}
@@ -263,13 +269,13 @@ def _reduced_observer(design: Design, ks: dict[str, float], KU: float, T: float,
         beta = math.sqrt(abs(Kw[i]) / (KU * ins))
         hterms = [Term(f"z_{s}", beta / alpha[s])]
         hterms += [Term(m, float(obs.Lr[i, k]) * beta / ks[m]) for k, m in enumerate(y) if obs.Lr[i, k] != 0]
-        blocks.append(Block(f"what_{s}", "sum", tuple(hterms), beta, STATE_UNITS[s],
+        blocks.append(Block(f"what_{s}", "sum", tuple(hterms), beta, spec.plant_model.state_units()[s],
                             f"reduced observer's estimate of {s} (z plus its sensor part)"))
         uterms.append(Term(f"what_{s}", -float(Kw[i]) / (beta * KU)))
     uterms += [Term(n, -design.gain(n) / (scale[n] * KU)) for n in model.states if n.startswith("int_")]
     blocks.append(Block("u_c", "sum", tuple(uterms), 1.0, "V", "control voltage to the servo amplifier"))
     return Realization(spec.name, dict(ks), tuple(blocks), KU, spec.patch.below_resolution, tuple(notes),
-                       dict(spec.sensors.labels))
+                       dict(spec.sensors.labels), plant=spec.plant_model)
 
 
 def _exact(c: float, top: float) -> float:

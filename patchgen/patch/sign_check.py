@@ -4,7 +4,8 @@ path at a time, moving only what a person can move.
 A step sets the pot it checks and the pots of one path through it at their settings (every other
 pot at 0), moves one input and says which way the reading must go. What is moved:
 
-- a position sensor by hand (the cart along the track, the pendulum about upright: HAND_MOVED),
+- a position sensor by hand (the cart along the track or the arm about its axis, the pendulum
+  about upright: the plant's position and angle),
   which checks the sensor's own polarity too;
 - any other sensor's input (a rate), its cord unplugged, at a test voltage from a spare pot;
 - an integrator's output, through its IC jack at a test voltage from a spare pot (in IC an
@@ -26,9 +27,9 @@ import numpy as np
 
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.static_check import FULL_SCALE, Condition, Wire, solve, spare_pots, test_voltage_source, wires_of
+from patchgen.plant.plant_model import CART, PlantModel
 from patchgen.profiles.machine import MachineProfile
 
-HAND_MOVED = ("s", "theta")  # the sensors a person moves by hand: the cart's position, the pendulum's angle
 SUMMING = ("summer", "inverter", "lag")  # a steady output for a steady input (a lag once settled)
 TARGET_V = 2.0  # a test voltage is chosen so that the reading is about this
 MAX_DEPTH = 8  # the longest path searched back from a pot to what moves it
@@ -77,7 +78,7 @@ class _Route:
         return order, len(self.pots)
 
 
-def sign_check(net: Netlist, machine: MachineProfile) -> tuple[SignStep, ...]:
+def sign_check(net: Netlist, machine: MachineProfile, plant: PlantModel = CART) -> tuple[SignStep, ...]:
     """One step per pot that checks its sign by moving a sensor or a test voltage.
 
     Parameters
@@ -86,6 +87,8 @@ def sign_check(net: Netlist, machine: MachineProfile) -> tuple[SignStep, ...]:
         The patch.
     machine : MachineProfile
         Its reference and pot resolution (a test voltage is a spare pot's setting).
+    plant : PlantModel
+        The plant whose position and angle a person moves by hand.
 
     Returns
     -------
@@ -94,7 +97,7 @@ def sign_check(net: Netlist, machine: MachineProfile) -> tuple[SignStep, ...]:
     """
     wires = wires_of(net)
     roles = {a.id: a.role for a in net.amplifiers}
-    hand = {s.id for s in net.sensors if s.quantity in HAND_MOVED}
+    hand = {s.id for s in net.sensors if s.quantity in (plant.position, plant.angle)}
     spares = spare_pots(net, machine)
     steps = []
     for p in net.pots:

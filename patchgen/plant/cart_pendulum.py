@@ -37,6 +37,12 @@ class Parameter:
     uncertain: bool = True
 
 
+NAME = "cart-pendulum"  # as a spec's [plant] model names it
+WHAT = "a pendulum on a cart driven along a track (Shaw's thesis; a Quanser IP02)"
+BODY = "cart"  # what the position is of, as a sentence names it
+INPUT, INPUT_UNIT = "F_U", "N"  # the force on the cart
+INPUT_NOUN, INPUT_WHAT = "force", "force on the cart"  # a table's heading; a control law's note
+
 STATES = (
     State("s", "m", "cart position, from the track's centre"),
     State("theta", "rad", "pendulum angle from upright"),
@@ -53,9 +59,16 @@ POSITION_OF = {rate: position for position, rate in RATE_OF.items()}  # the posi
 # What a lab's sensors read (the thesis's pots and tachometer; an IP02's encoders and filtered velocity):
 # the pendulum's rate is the patch's to find (a differentiator or an estimator)
 MEASURED = (POSITION, ANGLE, RATE_OF[POSITION])
+MEASURABLE = MEASURED  # what a bench's sensors may read
 ESTIMATED_RATE = RATE_OF[ANGLE]
 # the instruments that read them on the thesis's bench, as a sheet names them (a spec may name its own)
 SENSOR_LABELS = dict(zip(MEASURED, ("cart position pot", "pendulum angle pot", "motor tachometer")))
+# How a patch sheet speaks of the plant to the person at the bench: the plant as it is held while
+# the patch is set, what is moved by hand, how each hand-moved state is moved, and its signs
+AT_REST = "the cart held at the centre of the track"
+BY_HAND = "the cart or the pendulum"
+HAND_WORDS = {POSITION: "move the cart toward +s", ANGLE: "lean the pendulum toward +s"}
+SIGN_WORDS = "+s is the way a positive u_c drives the cart; θ is positive when the pendulum leans toward +s."
 
 # Table B.1's parameters, within the bounds of a bench-sized cart and pendulum (docs/spec.md)
 PARAMETERS = (
@@ -74,3 +87,5 @@ PARAMETERS = (
 )
 PARAMETER_NAMES = tuple(p.name for p in PARAMETERS)
 UNCERTAIN = tuple(p.name for p in PARAMETERS if p.uncertain)  # what a sweep or a sensitivity may put off
+OPTIONAL = ()  # no parameter without a default number may be left out
+STEP = 0.2  # m: sims/step-cart.toml's step, over which a patch's amplitudes are scaled

@@ -1,7 +1,7 @@
 """The plant interface: what a layer above asks of a pendulum, whichever it is.
 
 Each plant model (patchgen.plant.cart_pendulum, patchgen.plant.rotary_pendulum) describes itself
-in module constants; a PlantModel gathers them with the plant's parameter type and its linear
+in module constants of the same names; a PlantModel gathers them with the plant's parameter type and its linear
 model, so that the spec, the design and the layers after them ask ``spec.plant_model`` rather than
 import one plant's names. A spec's ``[plant] model`` names the plant (PLANT_MODELS; the
 cart-pendulum when left out, as every spec before the rotary pendulum).
@@ -41,6 +41,8 @@ class PlantModel:
         The input in a word or two (a table's heading) and in full (a control law's note).
     position, angle : str
         The state a travel limit and a step act on; the one a fall is judged on.
+    body : str
+        What the position is of, as a sentence names it ("cart", "arm").
     rate_of : mapping of str to str
         Each position-like state's rate.
     measurable : tuple of str
@@ -49,8 +51,17 @@ class PlantModel:
         What the named bench's sensors read when a spec does not say.
     sensor_labels : mapping of str to str
         What reads each measured quantity on the plant's reference bench, as a sheet names it.
+    at_rest, by_hand : str
+        How a sheet says the plant is held while a patch is set, and what a person moves by hand.
+    hand_words : mapping of str to str
+        How each hand-moved state is moved, in a sign check's row.
+    sign_words : str
+        The signs of the hand-moved states, said once above the sign check.
     parameters : tuple of Parameter
         The physical parameters, in the order of the parameter type's fields.
+    step : float
+        The position step of the plant's shipped step scenario (SI): a patch's amplitudes are scaled
+        over the loop released from it, as from a 10 deg lean.
     optional : tuple of str
         Parameters with no default number that may be left out (a rod's inertia: its mass and length's).
     params_type : type
@@ -68,14 +79,20 @@ class PlantModel:
     input_what: str
     position: str
     angle: str
+    body: str
     rate_of: Mapping[str, str]
     measurable: tuple[str, ...]
     measured: tuple[str, ...]
     sensor_labels: Mapping[str, str]
+    at_rest: str
+    by_hand: str
+    hand_words: Mapping[str, str]
+    sign_words: str
     parameters: tuple[Parameter, ...]
     params_type: type
     linear: Callable[[Any], tuple[np.ndarray, np.ndarray]] = field(repr=False)
-    optional: tuple[str, ...] = ()
+    step: float
+    optional: tuple[str, ...]
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -97,6 +114,12 @@ class PlantModel:
         """The pendulum's rate: the one a patch always finds, first among the derived rates."""
         return self.rate_of[self.angle]
 
+    def state_units(self) -> dict[str, str]:
+        """Each state's SI unit, a design's added states too: its integrals and its actuator's."""
+        units = self.units
+        return {**units, "int_s": f"{units[self.position]} s", "int_theta": f"{units[self.angle]} s",
+                "actuator": self.input_unit}
+
     @property
     def parameter_names(self) -> tuple[str, ...]:
         """The parameters' names, in order."""
@@ -113,22 +136,19 @@ class PlantModel:
         return self.params_type(**{k: v for k, v in values.items() if k in known})
 
 
-CART = PlantModel(
-    name="cart-pendulum", what="a pendulum on a cart driven along a track (Shaw's thesis; a Quanser IP02)",
-    states=cart_pendulum.STATES, input="F_U", input_unit="N", input_noun="force",
-    input_what="force on the cart", position=cart_pendulum.POSITION,
-    angle=cart_pendulum.ANGLE, rate_of=cart_pendulum.RATE_OF, measurable=cart_pendulum.MEASURED,
-    measured=cart_pendulum.MEASURED, sensor_labels=cart_pendulum.SENSOR_LABELS,
-    parameters=cart_pendulum.PARAMETERS, params_type=PlantParams, linear=cart_linear)
+def _described(module, params_type: type, linear) -> PlantModel:
+    """A plant model from the module that describes the plant (its constants by the names above)."""
+    m = module
+    return PlantModel(
+        name=m.NAME, what=m.WHAT, states=m.STATES, input=m.INPUT, input_unit=m.INPUT_UNIT, input_noun=m.INPUT_NOUN,
+        input_what=m.INPUT_WHAT, position=m.POSITION, angle=m.ANGLE, body=m.BODY, rate_of=m.RATE_OF,
+        measurable=m.MEASURABLE, measured=m.MEASURED, sensor_labels=m.SENSOR_LABELS, at_rest=m.AT_REST,
+        by_hand=m.BY_HAND, hand_words=m.HAND_WORDS, sign_words=m.SIGN_WORDS, parameters=m.PARAMETERS,
+        params_type=params_type, linear=linear, step=m.STEP, optional=m.OPTIONAL)
 
-ROTARY = PlantModel(
-    name="rotary-pendulum", what="a pendulum on an arm turned by a DC motor (Furuta's; a Quanser QUBE-Servo 2)",
-    states=rotary_pendulum.STATES, input=rotary_pendulum.INPUT, input_unit=rotary_pendulum.INPUT_UNIT,
-    input_noun="motor voltage", input_what="voltage on the arm's motor",
-    position=rotary_pendulum.POSITION, angle=rotary_pendulum.ANGLE, rate_of=rotary_pendulum.RATE_OF,
-    measurable=rotary_pendulum.MEASURABLE, measured=rotary_pendulum.MEASURED,
-    sensor_labels=rotary_pendulum.SENSOR_LABELS, parameters=rotary_pendulum.PARAMETERS, params_type=RotaryParams,
-    linear=rotary_linear, optional=rotary_pendulum.FROM_ROD)
+
+CART = _described(cart_pendulum, PlantParams, cart_linear)
+ROTARY = _described(rotary_pendulum, RotaryParams, rotary_linear)
 
 PLANT_MODELS = {m.name: m for m in (CART, ROTARY)}
 DEFAULT = CART.name  # a spec that names no plant model: every spec written before the rotary pendulum
@@ -137,3 +157,12 @@ DEFAULT = CART.name  # a spec that names no plant model: every spec written befo
 def plant_model(name: str) -> PlantModel:
     """The plant model a spec names (KeyError for a name not in PLANT_MODELS)."""
     return PLANT_MODELS[name]
+
+
+def model_of(params: Any) -> PlantModel:
+    """The plant model whose parameter type ``params`` is (a PlantParams is the cart's): so that a
+    stage handed a plant's figures asks them which plant they are."""
+    for model in PLANT_MODELS.values():
+        if isinstance(params, model.params_type):
+            return model
+    raise TypeError(f"{type(params).__name__} is no plant model's parameters")

@@ -15,6 +15,10 @@ import math
 
 from patchgen.plant.cart_pendulum import Parameter, State
 
+NAME = "rotary-pendulum"  # as a spec's [plant] model names it
+WHAT = "a pendulum on an arm turned by a DC motor (Furuta's; a Quanser QUBE-Servo 2)"
+BODY = "arm"  # what the position is of, as a sentence names it
+
 STATES = (
     State("alpha", "rad", "arm angle about the motor's axis, positive the way a positive motor voltage turns it"),
     State("theta", "rad", "pendulum angle from upright, positive when its tip leans the way +alpha moves the "
@@ -25,6 +29,7 @@ STATES = (
 STATE_NAMES = tuple(s.name for s in STATES)
 STATE_UNITS = {s.name: s.unit for s in STATES}
 INPUT, INPUT_UNIT = "V_m", "V"  # the motor's armature voltage
+INPUT_NOUN, INPUT_WHAT = "motor voltage", "voltage on the arm's motor"  # a table's heading; a control law's note
 
 POSITION = "alpha"  # the state the cable's wind-up and a step command act on
 ANGLE = "theta"  # the state whose excursion past the fall angle ends a run
@@ -37,6 +42,12 @@ MEASURED = (POSITION, ANGLE)
 MEASURABLE = (POSITION, ANGLE, RATE_OF[POSITION])
 ESTIMATED_RATES = (RATE_OF[POSITION], RATE_OF[ANGLE])
 SENSOR_LABELS = dict(zip(MEASURED, ("arm encoder", "pendulum encoder")))
+# How a patch sheet speaks of the plant (as patchgen.plant.cart_pendulum's)
+AT_REST = "the arm held at its centre, the pendulum hanging"
+BY_HAND = "the arm or the pendulum"
+HAND_WORDS = {POSITION: "turn the arm toward +α", ANGLE: "lean the pendulum toward +α"}
+SIGN_WORDS = ("+α is the way a positive u_c turns the arm; θ is positive when the pendulum leans the way +α moves "
+              "the arm's tip.")
 
 # A bench-sized rotary pendulum. l_r, J_r, l_p and J_p have no number for a default: left out, each
 # is a uniform rod's, from its mass and length (FROM_ROD; patchgen.plant.rotary_equations.RotaryParams)
@@ -68,3 +79,5 @@ PARAMETER_NAMES = tuple(p.name for p in PARAMETERS)
 FROM_ROD = ("l_r", "J_r", "l_p", "J_p")  # no default number: a uniform rod's when left out
 REQUIRED = tuple(p.name for p in PARAMETERS if p.default is None and p.name not in FROM_ROD)
 UNCERTAIN = tuple(p.name for p in PARAMETERS if p.uncertain)  # what a sweep or a sensitivity may put off
+OPTIONAL = FROM_ROD  # left out, a uniform rod's
+STEP = 0.5  # rad: the arm's step scenario, over which a patch's amplitudes are scaled

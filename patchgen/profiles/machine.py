@@ -9,6 +9,7 @@ from pydantic import Field, field_validator, model_validator
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded
 from patchgen.inputs.validation import load_profile
+from patchgen.plant.plant_model import CART, PlantModel
 
 Role = Literal["integrator", "summer", "inverter", "differentiator"]
 MAX_UNITS = 16  # slaved machines in one profile
@@ -85,7 +86,7 @@ class IntegratorMode(InputModel):
 
 
 # What a procedure step may name, filled in for each patch (see Procedure.steps)
-PLACEHOLDERS = ("machine", "units", "resolution", "reference_V", "integrators")
+PLACEHOLDERS = ("machine", "units", "resolution", "reference_V", "integrators", "at_rest", "by_hand")
 
 
 class Step(InputModel):
@@ -121,7 +122,7 @@ class Procedure(InputModel):
     checklist: list[Step] = Field(min_length=1, max_length=50)
 
     def steps(self, which: str, *, machine: str, units: int, resolution: float, reference_V: float,
-              integrators: tuple[str, ...], signs: bool) -> list[str]:
+              integrators: tuple[str, ...], signs: bool, plant: PlantModel = CART) -> list[str]:
         """The steps of one list that apply to a patch, placeholders filled in.
 
         Parameters
@@ -134,6 +135,8 @@ class Procedure(InputModel):
             Ids of the patch's integrators and lags (the ``integrators`` steps apply when any).
         signs : bool
             Whether the sheet has a sign table (chooses the ``signs`` or ``no_signs`` steps).
+        plant : PlantModel
+            Whose words fill ``at_rest`` (how it is held while the patch is set) and ``by_hand``.
 
         Returns
         -------
@@ -143,7 +146,7 @@ class Procedure(InputModel):
         applies = {"always": True, "integrators": bool(integrators), "signs": signs, "no_signs": not signs}
         values = {"machine": machine, "units": f", {units} units slaved together" if units > 1 else "",
                   "resolution": f"{resolution:g}", "reference_V": f"{reference_V:g}",
-                  "integrators": ", ".join(integrators)}
+                  "integrators": ", ".join(integrators), "at_rest": plant.at_rest, "by_hand": plant.by_hand}
         return [s.text.format(**values) for s in getattr(self, which) if applies[s.when]]
 
 

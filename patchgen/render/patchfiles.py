@@ -60,7 +60,7 @@ def sheet_summary(d: Design, sections: Sequence[SheetSection] = (), judged: AsPa
     return SheetSummary(design=design_label(d.spec), description=d.spec.description, states=list(d.states),
                         K=[float(k) for k in d.K[0]], poles=list(d.closed_loop_poles), margins=margins,
                         estimator=kind, sections=list(sections), K_spread=[float(u) for u in d.spread.K[0]],
-                        judged=judged, signs=signs, static=static)
+                        judged=judged, signs=signs, static=static, plant=d.spec.plant_model)
 
 
 def design_label(spec: DesignSpec) -> str:
@@ -135,7 +135,7 @@ def patch_files(d: Design, machine: MachineProfile, net: Netlist,
     files = {"netlist.json": net.to_json(), "margins.json": margins_json(judged, net.design), "pots.csv": pots_csv(net),
              "static-check.csv": static_check_csv(check)}
     whole = wiring_diagram(net)
-    svg, pages, signs = whole.svg, diagram_pages(net, whole), sign_check(net, machine)
+    svg, pages, signs = whole.svg, diagram_pages(net, whole), sign_check(net, machine, d.spec.plant_model)
     sections = sections() if callable(sections) else sections  # late: after what does not need them
     summary = sheet_summary(d, sections, judged, signs, static_section(check, net))
     html, md = render_sheet(net, summary, pages, machine.procedure)

@@ -18,9 +18,9 @@ from patchgen.design.precision import gain_text, significant_digits
 from patchgen.patch.as_patched import AsPatched
 from patchgen.patch.netlist import Amplifier, Netlist, Pot, wire_list
 from patchgen.patch.parts import fmt_value
-from patchgen.patch.realization import STATE_UNITS
 from patchgen.patch.sign_check import SignStep
 from patchgen.patch.snr_scaling import dial_limits
+from patchgen.plant.plant_model import CART, PlantModel
 from patchgen.profiles.machine import Procedure
 from patchgen.render.diagram_pages import PRINTED_MIN_PT, printed_scale, svg_size_mm
 from patchgen.render.diagram_symbols import SMALLEST_PT, dial_decimals, quantity_label, signed_label
@@ -60,6 +60,7 @@ class SheetSummary:
     judged: AsPatched | None = None  # the patch judged as patched: the sheet's 'Margins as patched'
     signs: tuple[SignStep, ...] = ()  # the sign check (patchgen.patch.sign_check), a step per pot
     static: SheetSection | None = None  # the static check, after the sign check
+    plant: PlantModel = CART  # whose states the gains are on, and whose input u is
 
 
 def render_sheet(netlist: Netlist, summary: SheetSummary, svg: str | list[tuple[str, str]],
@@ -133,7 +134,7 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
     for s, k, u in zip(summary.states, summary.K, spread):
         text, cut = gain_text(k, u)
         states.append({"state": quantity_label(s), "name": s, "K": _minus(text) + (" *" if cut else ""),
-                       "unit": gain_unit(s)})
+                       "unit": gain_unit(s, summary.plant)})
         if cut:
             n = significant_digits(k, u)
             gain_notes.append(f"{s}: {n} significant digits" if n else f"{s}: not beyond its size")
@@ -162,13 +163,15 @@ def sheet_context(net: Netlist, summary: SheetSummary, procedure: Procedure) -> 
         "amplifiers": amplifiers,
         "wires": wires,
         "ics": ics,
-        "sign_checks": sign_rows(summary.signs, net, procedure.ic_input),
-        "sign_note": sign_note(procedure.ic_input),
+        "sign_checks": sign_rows(summary.signs, net, procedure.ic_input, summary.plant),
+        "sign_note": sign_note(procedure.ic_input, summary.plant),
+        "plant": summary.plant,
         "static": summary.static,
         "static_tables": _column_groups(summary.static) if summary.static is not None else [],
         "checklist": procedure.steps("checklist", machine=net.machine_name, units=net.units,
                                      resolution=net.pot_resolution, reference_V=net.reference_V,
-                                     integrators=tuple(i["id"] for i in ics), signs=bool(summary.signs)),
+                                     integrators=tuple(i["id"] for i in ics), signs=bool(summary.signs),
+                                     plant=summary.plant),
         "notes": list(net.notes),
         "sections": summary.sections,
         "resolution": f"{net.pot_resolution:g}",
@@ -207,15 +210,17 @@ def _mode_words(name: str, jumper: str) -> str:
     return f"{jumper} patched to OUT" if jumper == name else f"{name}: {jumper} patched to OUT"
 
 
-def gain_unit(state: str) -> str:
-    """The unit of a state's gain in u = -K x (u in N): N per the state's unit (N s/m for m/s)."""
-    unit = STATE_UNITS.get(state, "")
-    if unit == "N":
-        return "N/N"
+def gain_unit(state: str, plant: PlantModel = CART) -> str:
+    """The unit of a state's gain in u = -K x, u the plant's input (the cart's force in N): the
+    input's unit per the state's (N s/m for m/s; V s/rad for a rotary arm's rad/s)."""
+    u = plant.input_unit
+    unit = plant.state_units().get(state, "")
+    if unit == u:
+        return f"{u}/{u}"
     if "/" in unit:
         num, den = unit.split("/", 1)
-        return f"N {den}/{num}"
-    return f"N/({unit})" if " " in unit else f"N/{unit}" if unit else "N"
+        return f"{u} {den}/{num}"
+    return f"{u}/({unit})" if " " in unit else f"{u}/{unit}" if unit else u
 
 
 def _carries(a: Amplifier) -> str:

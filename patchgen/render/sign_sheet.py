@@ -5,20 +5,22 @@ from __future__ import annotations
 
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.sign_check import SignStep
+from patchgen.plant.plant_model import CART, PlantModel
 from patchgen.render.diagram_symbols import quantity_label
 
-HAND_WORDS = {"s": "move the cart toward +s", "theta": "lean the pendulum toward +s"}
 
-
-def sign_rows(steps: tuple[SignStep, ...], net: Netlist, ic_input: str = "IC jack") -> list[dict[str, str]]:
+def sign_rows(steps: tuple[SignStep, ...], net: Netlist, ic_input: str = "IC jack",
+              plant: PlantModel = CART) -> list[dict[str, str]]:
     """The sign check's rows: pot, the pots set, what to move, where to read, which way; an
-    integrator's IC input named as the machine names it (``ic_input``)."""
+    integrator's IC input named as the machine names it (``ic_input``), a hand-moved state as the
+    plant's words say it."""
     sensors = {s.id: s for s in net.sensors}
     rows = []
     for st in steps:
         d = st.drive
         if d.kind == "hand":
-            move = HAND_WORDS.get(sensors[d.target].quantity, f"move {quantity_label(sensors[d.target].quantity)}")
+            q = sensors[d.target].quantity
+            move = plant.hand_words.get(q, f"move {quantity_label(q)}")
             move += " by hand" + (", read while it moves" if st.moving else "")
         elif d.kind == "input":
             move = f"{d.target} input at {_volts(d.volts)} ({d.source}), its sensor cord out"
@@ -36,13 +38,13 @@ def sign_rows(steps: tuple[SignStep, ...], net: Netlist, ic_input: str = "IC jac
     return rows
 
 
-def sign_note(ic_input: str = "IC jack") -> str:
+def sign_note(ic_input: str = "IC jack", plant: PlantModel = CART) -> str:
     """How the sign check is used, said once above its table."""
     return ("One row at a time, servo amplifier off, machine in IC: only the pots the row names at their settings, "
-            "every other pot at 0. +s is the way a positive u_c drives the cart; θ is positive when the pendulum "
-            "leans toward +s. A test voltage comes from where the row says (a spare pot, set with its load "
-            f"connected), on the input named (its sensor cord unplugged) or on the {ic_input} named (otherwise "
-            "grounded). A reading in OP: switch to OP, see which way the integrator ramps, and back to IC at once. "
+            f"every other pot at 0. {plant.sign_words} A test voltage comes from where the row says (a spare pot, "
+            "set with its load connected), on the input named (its sensor cord unplugged) or on the "
+            f"{ic_input} named (otherwise grounded). A reading in OP: switch to OP, see which way the integrator "
+            "ramps, and back to IC at once. "
             "A reading that goes the other way has a sign wrong on its path (a cord on the wrong polarity, a sensor "
             "reversed).")
 

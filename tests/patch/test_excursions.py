@@ -10,11 +10,11 @@ import pytest
 
 from patchgen.patch.compensator_forms import (
     SCALING_HORIZON_S,
-    SCALING_S0_M,
     SCALING_STEP_S,
     SCALING_THETA0_RAD,
     excursion_peaks,
 )
+from patchgen.plant.plant_model import CART
 
 
 def test_a_decaying_and_an_oscillating_loop_peak_as_their_closed_form():
@@ -25,8 +25,8 @@ def test_a_decaying_and_an_oscillating_loop_peak_as_their_closed_form():
     C = np.array([[1.0, 0, 0, 0], [0, 1.0, 1.0, 0]])
     t = SCALING_STEP_S * np.arange(1, round(SCALING_HORIZON_S / SCALING_STEP_S) + 1)
     theta = SCALING_THETA0_RAD * np.exp(-2.0 * t)
-    rotated = SCALING_S0_M * np.abs(np.cos(3 * t) - np.sin(3 * t))
-    got = excursion_peaks(A, C, [0, 1])
+    rotated = CART.step * np.abs(np.cos(3 * t) - np.sin(3 * t))
+    got = excursion_peaks(A, C, [(0, SCALING_THETA0_RAD), (1, CART.step)])
     assert got == pytest.approx([theta.max(), rotated.max()], rel=1e-12)
 
 
@@ -36,6 +36,6 @@ def test_a_diverging_loop_stops_at_its_first_sample_past_1e12_and_says_nothing()
     k = math.ceil(math.log(1e12 / SCALING_THETA0_RAD) / math.log(growth))  # the first sample past 1e12
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        got = excursion_peaks(A, np.eye(2), [0, 1])
+        got = excursion_peaks(A, np.eye(2), [(0, SCALING_THETA0_RAD), (1, CART.step)])
     assert got[0] == pytest.approx(SCALING_THETA0_RAD * growth ** k, rel=1e-9)
-    assert got[1] == pytest.approx(SCALING_S0_M * math.exp(-SCALING_STEP_S), rel=1e-12)
+    assert got[1] == pytest.approx(CART.step * math.exp(-SCALING_STEP_S), rel=1e-12)

@@ -59,11 +59,11 @@ class Row:
 
 def shipped_designs(designs: Path = DESIGNS) -> list[str]:
     """The shipped designs patchgen patches: the spec files in designs/ of a plant model the patch
-    takes (a rotary pendulum's is designed alone so far)."""
+    takes (every one, now)."""
     from patchgen.inputs.spec import load_spec
-    from patchgen.pipeline.inputs import PATCHED_PLANTS
+    from patchgen.pipeline.inputs import plants_of
 
-    return sorted(p.stem for p in designs.glob("*.toml") if load_spec(p).plant.model in PATCHED_PLANTS)
+    return sorted(p.stem for p in designs.glob("*.toml") if load_spec(p).plant.model in plants_of("patch"))
 
 
 def rows(designs: Path = DESIGNS) -> list[Row]:

@@ -6,15 +6,14 @@ from __future__ import annotations
 from patchgen.inputs.errors import ResourceError
 from patchgen.inputs.resources import shipped
 from patchgen.inputs.spec import load_spec
-from patchgen.pipeline.inputs import PATCHED_PLANTS
+from patchgen.pipeline.inputs import plants_of
 
 MACHINES = ("gp6", "the-analog-thing")
 
 
-def patched_designs() -> list[str]:
-    """The shipped designs of a plant model patchgen patches (PATCHED_PLANTS): the others are
-    designed alone so far."""
-    return [name for name in shipped("design") if load_spec(name).plant.model in PATCHED_PLANTS]
+def patched_designs(command: str = "patch") -> list[str]:
+    """The shipped designs of a plant model ``command`` takes (patchgen.pipeline.inputs.plants_of)."""
+    return [name for name in shipped("design") if load_spec(name).plant.model in plants_of(command)]
 
 
 def shipped_cases() -> list[tuple[str, str]]:

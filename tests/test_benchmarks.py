@@ -51,7 +51,7 @@ ISSUE_TABLE = {
 def test_every_shipped_design_is_patched_in_a_row():
     assert SHIPPED, "no design in designs/"
     assert set(SHIPPED) <= set(shipped("design"))  # the folder is what the CLI ships
-    assert "qube-servo-2" not in SHIPPED and "bench-recommended" in SHIPPED  # designed alone so far
+    assert "qube-servo-2" in SHIPPED and "bench-recommended" in SHIPPED  # both plants are patched
     patched = sorted(r.args[1] for r in ROWS if r.args[0] == "patch" and r.table)
     assert patched == SHIPPED
 
@@ -99,7 +99,7 @@ def test_row_is_a_command_line_patchgen_accepts(row, tmp_path, capsys):
     if row.writes:
         assert ctx.params["out_dir"] == str(out)
     if "spec" in ctx.params:
-        inputs = load_inputs(ctx.params["spec"], bench=ctx.params.get("bench_name"))
+        inputs = load_inputs(ctx.params["spec"], bench=ctx.params.get("bench_name"), command=args[0])
         if ctx.params.get("scenario_path"):
             scenario_for(ctx.params["scenario_path"], inputs.spec, runs=ctx.params.get("runs", 1))
     if "REC" in row.args:

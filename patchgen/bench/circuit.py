@@ -22,7 +22,7 @@ from patchgen.inputs.errors import InputError
 from patchgen.patch.netlist import Netlist
 from patchgen.patch.readback import law_read
 from patchgen.patch.reading import Stage, read
-from patchgen.plant.equations import PLANT_STATES
+from patchgen.plant.plant_model import PLANT_MODELS
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
@@ -106,10 +106,11 @@ def compile_circuit(net: Netlist, machine: MachineProfile, bench: BenchProfile) 
     patched, nor simulated at a fixed step); with no ``T_d_s`` it gets the machine time scale.
     """
     src = f"netlist {net.design}"
+    states = PLANT_MODELS[bench.plant].state_names  # the bench's plant's
     for i, s in enumerate(net.sensors):
-        if s.quantity not in PLANT_STATES:
+        if s.quantity not in states:
             raise InputError(src, f"sensors[{i}].quantity",
-                             f"unknown quantity {s.quantity!r} (known: {', '.join(PLANT_STATES)})")
+                             f"unknown quantity {s.quantity!r} (known: {', '.join(states)})")
     reading = read(net, machine.imperfections.differentiator_rolloff_s)
     index = {sid: i for i, sid in enumerate(reading.sensors)}
     index.update({aid: len(reading.sensors) + j for j, aid in enumerate(reading.order)})
@@ -129,7 +130,7 @@ def compile_circuit(net: Netlist, machine: MachineProfile, bench: BenchProfile) 
     return Circuit(
         design=net.design,
         sensor_ids=reading.sensors,
-        sensor_state=np.array([PLANT_STATES.index(s.quantity) for s in net.sensors], dtype=np.int64),
+        sensor_state=np.array([states.index(s.quantity) for s in net.sensors], dtype=np.int64),
         sensor_gain=sensor_constants(net, bench),
         amp_ids=reading.order,
         amp_kind=np.array(kind, dtype=np.int64),

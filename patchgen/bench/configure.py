@@ -29,6 +29,8 @@ from patchgen.bench.lanes import (
     ACT_LAG,
     ACT_LAG_ZERO,
     ACT_MOTOR,
+    PLANT_CART,
+    PLANT_ROTARY,
     input_groups,
 )
 from patchgen.bench.noise_drift import NoiseAndDrift, noise_and_drift
@@ -36,10 +38,12 @@ from patchgen.bench.results import SimSettings
 from patchgen.inputs.drive_fields import LAG_MODELS, motor_of
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
-from patchgen.plant.cart_pendulum import POSITION_OF
 from patchgen.plant.compiled import P_HALF_TRACK, VECTOR_PARAMETERS, plant_vector
 from patchgen.plant.drive import with_rotor
-from patchgen.plant.equations import PLANT_STATES, PlantParams
+from patchgen.plant.equations import PlantParams
+from patchgen.plant.plant_model import CART, PLANT_MODELS, model_of
+from patchgen.plant.rotary_compiled import rotary_vector
+from patchgen.plant.rotary_equations import RotaryParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
@@ -48,7 +52,7 @@ LIMIT_TOL = 1e-9  # relative: an actuator limit at the rails, as a motor's a V_l
 SPREAD_ORDER = tuple(k for k in VECTOR_PARAMETERS if k not in ("J", "F_C"))
 
 
-def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
+def engine_config(circuit: Circuit, plant: PlantParams | RotaryParams, bench: BenchProfile,
                   machine: MachineProfile, scenario: Scenario, *,
                   ideal: bool = False, spread: dict[str, float] | None = None,
                   bench_spread: bool = False, rails: bool = True) -> tuple[EngineConfig, SimSettings]:
@@ -58,8 +62,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     ----------
     circuit : Circuit
         The compiled netlist.
-    plant : PlantParams
-        The nominal plant.
+    plant : PlantParams or RotaryParams
+        The nominal plant (a cart or a rotary pendulum: the bench's own).
     bench, machine : BenchProfile, MachineProfile
         The actuator, sensors and track; the machine's imperfections.
     scenario : Scenario
@@ -81,6 +85,9 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         What the engine runs, and what was simulated, in words and SI units.
     """
     spread = dict(spread or {})
+    pm = model_of(plant)
+    if pm is not CART and any(spread.values()):
+        raise InputError("--spread", "", f"draws a cart's parameters; {pm.name}'s are not spread yet")
     ranges = bs.active_ranges(bench, ideal, scenario.noise.mode == "profile") if bench_spread else {}
     fastest = [1.0 / v for v in circuit.time_rates() + circuit.internal_rates() if v > 0]
     motor = motor_of(bench.actuator)
@@ -95,8 +102,9 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     stride = max(1, round(scenario.record_dt_s / step))
     imp = machine.imperfections
 
-    scenario = scenario.on_track(plant.d)  # an offset or step given as a fraction of the track, in metres
-    scenario = scenario.on_pendulum(plant)  # a push at a stated point of the pendulum: on the cart and at l
+    if pm is CART:
+        scenario = scenario.on_track(plant.d)  # an offset or step given as a fraction of the track, in metres
+        scenario = scenario.on_pendulum(plant)  # a push at a stated point of the pendulum: on the cart and at l
     levels = noise_and_drift(circuit.sensor_ids, bench, machine, scenario, ideal)
     sensor_rms, amp_rms, drift = levels.sensor_V_rms, levels.amplifier_V_rms, levels.drift_V_per_s
     s_proc = [noise_process(sensor_rms[s], levels.sensor_bandwidth_Hz, step)
@@ -124,7 +132,7 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
     emf = 0.0 if motor is None else motor.back_emf_damping()
     if ideal:
         model, tau, dead, flim = (ACT_GAIN if motor is None else ACT_MOTOR), 0.0, 0.0, math.inf
-        act_text = f"ideal: pure gain K_U = {act.K_U} N/V (no lag, dead zone or force limit)"
+        act_text = f"ideal: pure gain K_U = {act.K_U} {pm.input_unit}/V (no lag, dead zone or limit)"
         if motor is not None:
             act_text += f", with the motor's back-EMF ({emf:.6g} N s/m) and rotor"
     elif motor is not None:
@@ -140,22 +148,28 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
                 raise InputError(f"bench {bench.id}", "actuator.tau",
                                  "model lag_zero needs tau > 0")
             model = ACT_GAIN
-        act_text = (f"{act.model}: K_U = {act.K_U} N/V, tau = {tau} s, "
-                    f"dead zone +/-{dead} V, force limit +/-{flim} N")
+        act_text = (f"{act.model}: K_U = {act.K_U} {pm.input_unit}/V, tau = {tau} s, "
+                    f"dead zone +/-{dead} V, {pm.input_noun} limit +/-{flim} {pm.input_unit}")
 
-    cut = bench.track.cut_at(plant.d)  # where the switches or the watchdog cut the motor
+    if pm is CART:
+        cut = bench.track.cut_at(plant.d)  # where the switches or the watchdog cut the motor
+        vector = _with_cut(plant_vector(with_rotor(plant, motor)), cut)
+    else:  # the run ends where the cable winds up (none: a slip ring)
+        cut = plant.alpha_limit if math.isfinite(plant.alpha_limit) else None
+        vector = rotary_vector(plant)
     kinds, t0s, t1s, vals = [], [], [], []
     for d in scenario.disturbances:
         if d.kind == "step":
             kinds.append(DIST_STEP)
             t0s.append(d.time_s)
             t1s.append(math.inf)
-            vals.append(d.size_m)
-        else:
-            kinds.append(DIST_TIP_FORCE if d.at == "pendulum_tip" else DIST_CART_FORCE)
+            vals.append(d.step_size())
+            continue
+        for kind, value in _pushes(d, plant):
+            kinds.append(kind)
             t0s.append(d.time_s)
             t1s.append(d.time_s + d.duration_s)
-            vals.append(d.force_N)
+            vals.append(value)
 
     groups = input_groups(circuit.in_ptr, circuit.in_src, circuit.in_gain,
                           zero_row=circuit.n_sensors + circuit.n_amps + len(f_proc))  # sig's zero row
@@ -164,8 +178,8 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
             dt=float(step), steps=int(n_steps), stride=int(stride), saturation=float(imp.saturation_V),
             clip=not ideal and rails, limit_switches=cut is not None,
             fall_angle=math.radians(scenario.fall_angle_deg), output=int(circuit.output_index),
-            x0=np.array(scenario.initial.vector(), dtype=np.float64),
-            actuator=int(model)),
+            x0=np.array(scenario.initial.vector(pm), dtype=np.float64),
+            actuator=int(model), plant=PLANT_CART if pm is CART else PLANT_ROTARY),
         sensors=_sensors(circuit, bench, ideal),
         noise=Noise(a=_f64([p[0] for p in s_proc] + [a_proc[0]] * circuit.n_amps + [p[0] for p in f_proc]),
                     std=_f64([p[1] for p in s_proc] + [a_proc[1]] * circuit.n_amps + [p[1] for p in f_proc])),
@@ -175,11 +189,11 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
                       drift=_f64(_drifts(circuit, levels, machine)), group_ptr=groups[0], group_src=groups[1],
                       group_gain=groups[2]),
         disturbances=Disturbances(kind=_i64(kinds), t0=_f64(t0s), t1=_f64(t1s), value=_f64(vals)),
-        plant=_with_cut(plant_vector(with_rotor(plant, motor)), cut),
-        plant_spread=_f64([spread.get(k, 0.0) for k in SPREAD_ORDER]),
+        plant=vector,
+        plant_spread=_f64([spread.get(k, 0.0) for k in SPREAD_ORDER] if pm is CART else []),
         actuator=_f64([act.K_U, tau, dead, flim, emf]),
         bench_spread=bs.plan(ranges, bench.uncertainty.distribution,
-                             tuple(PLANT_STATES[q] for q in circuit.sensor_state), circuit.sensor_ids, unit_std),
+                             tuple(pm.state_names[q] for q in circuit.sensor_state), circuit.sensor_ids, unit_std),
     )
     settings = SimSettings(
         dt_s=step, steps=n_steps, record_dt_s=stride * step,
@@ -190,10 +204,10 @@ def engine_config(circuit: Circuit, plant: PlantParams, bench: BenchProfile,
         force_bandwidth_Hz=levels.force_bandwidth_Hz,
         saturation_V=imp.saturation_V, saturation_clipped=not ideal and rails,
         actuator=act_text, limit_switches=bool(bench.track.limit_switches),
-        half_track_m=plant.d / 2, watchdog_m=bench.track.watchdog_m,
+        half_track_m=plant.d / 2 if pm is CART else plant.alpha_limit, watchdog_m=bench.track.watchdog_m,
         plant_spread={k: v for k, v in spread.items() if v},
         bench_spread={k: list(v) for k, v in ranges.items()},
-        bench_distribution=bench.uncertainty.distribution if ranges else None,
+        bench_distribution=bench.uncertainty.distribution if ranges else None, plant=pm.name,
     )
     return cfg, settings
 
@@ -230,14 +244,33 @@ def _sensors(circuit: Circuit, bench: BenchProfile, ideal: bool) -> Sensors:
     ideal (a count is a measurement's imperfection, as noise is; a filter is the sensor itself)."""
     quanta, filters = ({} if ideal else bench.sensors.quanta()), bench.sensors.filters()
     order = sorted(filters)  # a filter per filtered quantity, in name order
-    qs = [PLANT_STATES[i] for i in circuit.sensor_state]
+    pm = PLANT_MODELS[bench.plant]
+    states, position_of = pm.state_names, pm.position_of
+    qs = [states[i] for i in circuit.sensor_state]
     filt = [order.index(q) if q in filters else -1 for q in qs]
-    source = [PLANT_STATES.index(POSITION_OF[q]) if q in filters else -1 for q in qs]
+    source = [states.index(position_of[q]) if q in filters else -1 for q in qs]
     return Sensors(state=_i64(circuit.sensor_state), gain=_f64(circuit.sensor_gain),
-                   quantum=_f64([quanta.get(POSITION_OF[q] if q in filters else q, 0.0) for q in qs]),
+                   quantum=_f64([quanta.get(position_of[q] if q in filters else q, 0.0) for q in qs]),
                    filt=_i64(filt), source=_i64(source),
                    wn=_f64([filters[q].wn_rad_s if q in filters else 0.0 for q in qs]),
                    zeta=_f64([filters[q].zeta if q in filters else 0.0 for q in qs]))
+
+
+def _pushes(d, plant: PlantParams | RotaryParams) -> list[tuple[int, float]]:
+    """A scenario's push as the kernel's channels take it, (DIST_* kind, value): on a cart, a force
+    at the tip or on the cart (N; a push at a stated point is already shared out, Scenario.on_pendulum);
+    on a rotary pendulum, a force at the pendulum's tip (N) and a torque on the arm (N m) from a
+    push at the arm's end (force x L_r), a push at arm_m along the pendulum being both: arm_m / L_p
+    of it at the tip, the rest's lever on the arm."""
+    if isinstance(plant, PlantParams):
+        return [(DIST_TIP_FORCE if d.at == "pendulum_tip" else DIST_CART_FORCE, d.force_N)]
+    if d.at == "arm":
+        return [(DIST_CART_FORCE, d.force_N * plant.L_r)]
+    share = 1.0 if d.arm_m is None else d.arm_m / plant.L_p
+    out = [(DIST_TIP_FORCE, d.force_N * share)]
+    if share != 1.0:
+        out.append((DIST_CART_FORCE, d.force_N * (1.0 - share) * plant.L_r))
+    return out
 
 
 def _drifts(circuit: Circuit, levels: NoiseAndDrift, machine: MachineProfile) -> np.ndarray:

@@ -39,6 +39,7 @@ from patchgen.bench.circuit import DIFFERENTIATOR
 from patchgen.bench.lanes import (
     N_ACTUATOR,
     N_ACTUATOR_ROWS,
+    PLANT_ROTARY,
     actuator_rates,
     circuit,
     drive,
@@ -49,9 +50,10 @@ from patchgen.bench.lanes import (
 from patchgen.bench.noise import WORDS, fill_normals
 from patchgen.plant.compiled import N_COEF, P_HALF_TRACK, plant_coefficients
 from patchgen.plant.equations import PLANT_STATES
+from patchgen.plant.rotary_compiled import P_ARM_LIMIT, rotary_coefficients
 
-COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py")  # under patchgen/
-COMPILED_IN = "dba1e7b1d96383ce"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
+COMPILED_FILES = ("bench/lanes.py", "bench/noise.py", "plant/compiled.py", "plant/rotary_compiled.py")  # patchgen/
+COMPILED_IN = "35449ecf00df60f6"  # sha256 of COMPILED_FILES in that order, first 16 hex digits
 LANES = 128  # runs per block (fewer, and the per-step work that is not per lane weighs more)
 PAD = 16  # a block computes a multiple of this many lanes: four AVX2 registers of four lanes
 DIST_CART_FORCE, DIST_TIP_FORCE, DIST_STEP = 0, 1, 2
@@ -101,6 +103,8 @@ class Settings(NamedTuple):
     output: int  # signal index of the control voltage u_c
     x0: np.ndarray  # plant state at t = 0
     actuator: int  # model: ACT_* of patchgen.bench.lanes (its values are each run's, in Draws)
+    plant: int  # PLANT_* of patchgen.bench.lanes: the cart (Draws' plants PLANT_VECTOR's) or the rotary
+    # pendulum (ROTARY_VECTOR's); its position's limit is the cart's switch or the arm's cable
 
 
 class Sensors(NamedTuple):
@@ -210,8 +214,12 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
     over = np.empty((3, na, nl))  # each lane's overloads (first time, time) and peak, copied out at its end
     for l in range(nl):
         r = lo + min(l, nr - 1)  # a lane past the block's runs computes its last run again
-        plant_coefficients(plants[r], pc[:, l])
-        half[l] = plants[r, P_HALF_TRACK]
+        if settings.plant == PLANT_ROTARY:
+            rotary_coefficients(plants[r], pc[:, l])
+            half[l] = plants[r, P_ARM_LIMIT]
+        else:
+            plant_coefficients(plants[r], pc[:, l])
+            half[l] = plants[r, P_HALF_TRACK]
         k0[l], k1[l] = keys[r, 0], keys[r, 1]
         for i in range(N_ACTUATOR):
             act[i, l] = draws.actuators[r, i]
@@ -294,7 +302,8 @@ def run_block(lo, nl, draws, settings, sensors, noise, wiring, disturbances, out
             X, Z, XA, XF = (xp, za, xa, xf) if st == 0 else (xt, zt, xat, xft)
             sensor_filters(X, XF, sensors, K, rf, st)
             circuit(X, Z, XF, s_ref, nz, sensors, gain, wiring, drift, sat, clip, sig, raw, K, ra, st, acc)
-            drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, K, act_rows, st)
+            drive(X, XA, sig, out_index, tripped, pc, settings.actuator, act, f_cart, f_tip, nz, K, act_rows, st,
+                  settings.plant)
             if st == 0:  # record and summarise time t; a run ends at the scenario's end or at a trip
                 for l in range(n_hist):
                     if alive[l] and (n % stride == 0 or n == n_steps or tripped[l]):

@@ -16,8 +16,10 @@ import numpy as np
 from patchgen.bench.circuit import INTEGRATOR, LAG, SUMMER
 from patchgen.plant.compiled import plant_accel, sincos
 from patchgen.plant.equations import PLANT_STATES
+from patchgen.plant.rotary_compiled import rotary_accel
 
 ACT_GAIN, ACT_LAG, ACT_LAG_ZERO, ACT_MOTOR = 0, 1, 2, 3
+PLANT_CART, PLANT_ROTARY = 0, 1  # the plant a batch runs: its equations and what its pushes are
 # a run's actuator: N/V, s, V, N, N s/m (a motor's back-EMF damping; 0 for the others)
 ACTUATOR_VECTOR = ("K_U", "tau", "dead_zone", "force_limit", "back_emf")
 A_K_U, A_TAU, A_DEAD_ZONE, A_FORCE_LIMIT, A_BACK_EMF = range(len(ACTUATOR_VECTOR))
@@ -233,7 +235,7 @@ def _store(K, st, l, rx, rate, force, limited, tripped):
 
 
 @nb.njit(**_JIT)
-def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, K, rx, st):
+def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, K, rx, st, kind):
     """Actuator (dead zone, model, force limit; off once tripped) and plant slopes per lane,
     into K[st]: the plant's rows, and rows rx: the actuator state's slope, the force, and 1.0
     where the command sits at the actuator's limit, else 0.0. act: the actuator's model ACT_*;
@@ -241,9 +243,11 @@ def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, K, rx,
     K_U, tau, dead zone, force limit, back-EMF, then 1 / tau and K_U / tau (actuator_rates); a
     motor's command K_U v is limited at the amplifier (force limit = a V_limit), then the back-EMF
     takes b s_dot from it, through the electrical lag tau when it has one;
-    X (plant state), XA (actuator state) and pc (plant_coefficients) are per lane. f_cart and
+    X (plant state), XA (actuator state) and pc (the plant's coefficients) are per lane. f_cart and
     f_tip are the scenario's pushes (N); the last two rows of nz, the bench's random forces on
-    the cart and at the tip (N), per lane."""
+    the cart and at the tip (N), per lane. ``kind``: the plant, PLANT_CART (f_cart a force on the
+    cart, the actuator's output a force) or PLANT_ROTARY (f_cart a torque on the arm, N m, the
+    actuator's output the motor's voltage)."""
     fc, ft = nz.shape[0] - 2, nz.shape[0] - 1
     # Two lane loops, not one: the actuator's branches and the plant's trigonometry in one
     # body keep LLVM from vectorising either; split, both run on whole SIMD registers. Each
@@ -272,6 +276,16 @@ def drive(X, XA, sig, out_index, tripped, pc, act, ap, f_cart, f_tip, nz, K, rx,
             v, xa = _dead(sig[out_index, l], ap[A_DEAD_ZONE, l]), XA[l]
             force, limited = _limit(ap[A_KU_TAU, l] * (v - xa), ap[A_FORCE_LIMIT, l])
             _store(K, st, l, rx, (v - xa) * ap[A_INV_TAU, l], force, limited, tripped[l])
+    if kind == PLANT_ROTARY:
+        for l in range(XA.shape[0]):
+            ad, thd = X[2, l], X[3, l]
+            sn, cs = sincos(X[1, l])
+            add, thdd = rotary_accel(pc, l, sn, cs, ad, thd, K[st, rx[1], l], f_cart + nz[fc, l], f_tip + nz[ft, l])
+            K[st, 0, l] = ad
+            K[st, 1, l] = thd
+            K[st, 2, l] = add
+            K[st, 3, l] = thdd
+        return
     for l in range(XA.shape[0]):
         sd, thd = X[2, l], X[3, l]
         sn, cs = sincos(X[1, l])

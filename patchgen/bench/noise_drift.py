@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from patchgen.inputs.scenario import Scenario
+from patchgen.plant.plant_model import ROTARY
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
@@ -27,7 +28,8 @@ class NoiseAndDrift:
     amplifier_V_rms: float = 0.0
     amplifier_bandwidth_Hz: float = 0.0
     drift_V_per_s: float = 0.0
-    cart_force_N_rms: float = 0.0
+    cart_force_N_rms: float = 0.0  # the random generalised force on the position: on a cart, N; on a
+    # rotary pendulum's arm, a torque in N m
     tip_force_N_rms: float = 0.0
     force_bandwidth_Hz: float = 0.0
 
@@ -74,11 +76,12 @@ def noise_and_drift(sensor_ids: Sequence[str], bench: BenchProfile, machine: Mac
     elif scenario.noise.mode == "explicit":
         sensor_rms = {s: scenario.noise.level(s) for s in sensor_ids}
         amp_rms = scenario.noise.level("amplifier")
-        forces = (scenario.noise.level("cart_force_N"), scenario.noise.level("tip_force_N"))
+        on_position = "arm_torque_Nm" if bench.plant == ROTARY.name else "cart_force_N"
+        forces = (scenario.noise.level(on_position), scenario.noise.level("tip_force_N"))
     else:
         sensor_rms = {s: float(sens.noise_V_rms.get(s, 0.0)) for s in sensor_ids}
         amp_rms = imp.amplifier_noise_V_rms
-        forces = (dist.cart_force_N_rms, dist.tip_force_N_rms)
+        forces = (dist.position_rms, dist.tip_force_N_rms)
     if ideal or scenario.drift == "off":
         drift = 0.0
     elif scenario.drift == "profile":

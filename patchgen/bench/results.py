@@ -89,18 +89,19 @@ class SimSettings:
     amplifier_noise_V_rms: float
     amplifier_noise_bandwidth_Hz: float
     integrator_drift_V_per_s: float
-    cart_force_N_rms: float  # the bench's random force on the cart
+    cart_force_N_rms: float  # the bench's random force on the cart (on a rotary arm: its torque, N m)
     tip_force_N_rms: float  # and at the pendulum's tip
     force_bandwidth_Hz: float
     saturation_V: float
     saturation_clipped: bool
     actuator: str
     limit_switches: bool
-    half_track_m: float
+    half_track_m: float  # where the run ends at the position's limit (a rotary arm's cable: rad)
     watchdog_m: float | None  # the lab's control cuts the motor at this |s| (none: the switches alone)
     plant_spread: dict[str, float]
     bench_spread: dict[str, list[float]] = field(default_factory=dict)  # key -> [low, high] each run drew from
     bench_distribution: str | None = None  # how: uniform or normal (None: no bench spread)
+    plant: str = "cart-pendulum"  # the plant model simulated (patchgen.plant.plant_model): its words name the figures
 
 
 @dataclass

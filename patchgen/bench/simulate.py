@@ -38,10 +38,20 @@ from patchgen.bench.results import RunSummary, SimResult, distribution, run_summ
 from patchgen.inputs.scenario import Scenario
 from patchgen.patch.netlist import Netlist
 from patchgen.plant.equations import PlantParams
+from patchgen.plant.plant_model import CART, PlantModel, model_of
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
 __all__ = ["RunSummary", "SimResult", "simulate"]
+
+
+def history_channels(pm: PlantModel) -> tuple[str, ...]:
+    """The history's channels (the kernel's HISTORY_CHANNELS) by the plant's names: time, its
+    states, its position's reference (s_ref), the command and the plant's input (the cart's force;
+    a rotary arm's motor voltage, V_m)."""
+    if pm is CART:
+        return HISTORY_CHANNELS
+    return ("t",) + pm.state_names + (f"{pm.position}_ref", "u_c", pm.input)
 
 
 def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
@@ -121,7 +131,7 @@ def simulate(netlist: Netlist, plant: PlantParams, bench: BenchProfile, machine:
     history = None
     if keep_history:
         h = parts[0].history[0, :parts[0].history_length[0]]
-        names = HISTORY_CHANNELS + circuit.amp_ids
+        names = history_channels(model_of(plant)) + circuit.amp_ids
         history = {name: h[:, k].copy() for k, name in enumerate(names)}
     return SimResult(
         design=netlist.design, scenario=scenario, machine=machine.id, bench=bench.id, ideal=ideal,

@@ -6,7 +6,6 @@ import click
 
 from patchgen.pipeline.design import run_design
 from patchgen.pipeline.inputs import load_inputs
-from patchgen.plant.plant_model import PLANT_MODELS
 from patchgen.render.design_tables import print_design
 from patchgen.render.outputs import json_text
 
@@ -20,7 +19,7 @@ from .options import MACHINE, json_option
 @json_option("the design as one object")
 def design_cmd(spec: str, machine: str | None, as_json: bool) -> None:
     """Compute the LQR gain, Kalman estimator, loop transfer recovery and loop margins of SPEC."""
-    report = run_design(load_inputs(spec, machine=machine, plants=tuple(PLANT_MODELS), command="design"))
+    report = run_design(load_inputs(spec, machine=machine, command="design"))
     if as_json:
         click.echo(json_text(report.summary()), nl=False)
     else:

@@ -11,19 +11,21 @@ import math
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import Field, PrivateAttr, ValidationInfo, field_validator
+from pydantic import Field, PrivateAttr, ValidationInfo, create_model, field_validator
 
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.fields import InputModel, Int, Real, bounded, magnitude
 from patchgen.inputs.resources import resolve
 from patchgen.inputs.validation import read_toml, validate
 from patchgen.plant.equations import PlantParams, push_shares
+from patchgen.plant.plant_model import CART, PLANT_MODELS, ROTARY, PlantModel
 
 MAX_DURATION_S = 1e5  # about a day: longer than any bench experiment
 LEVEL_MAX_V = 100.0  # noise levels (V rms) and drift rates (V/s): far beyond any machine's rails
 MAX_DISTANCE_M = 100.0  # cart position and step size: a hundred times a bench track (d = 1.09 m)
 MAX_SPEED_M_S = 100.0  # cart speed: far beyond any cart a bench force can move
 MAX_RATE_RAD_S = 1000.0  # pendulum rate: far beyond any swing of a bench pendulum
+MAX_ARM_TURNS = 10  # a rotary arm's angle either way: far beyond any cable's wind-up
 MAX_FORCE_N = 1e4  # a push: far beyond the 15 N the bench's actuator gives
 DT_RANGE_S = (1e-6, 0.05)  # the engine's step: at most a quarter of the bench actuator's 0.2 s lag
 RECORD_DT_RANGE_S = (1e-6, 1e3)  # history sample interval
@@ -35,58 +37,100 @@ MAX_DISTURBANCES = 1000  # disturbances in one scenario: far more than any exper
 SEED_LIMIT = 2**63  # a seed is a non-negative signed 64-bit integer, as the simulator checks too
 
 
-class InitialState(InputModel):
-    """Plant state at t = 0 (SI units; the angle in rad or in degrees, not both; the cart in metres
-    or as a fraction of the track, not both): the angle within +/-180 deg, the cart within 100 m
-    (and, against a spec, inside its track)."""
+def _initial_fields() -> dict:
+    """One field per state of every plant model, in SI units (an angle in rad, or in degrees as
+    ``<name>_deg``; a distance in metres, or as ``<name>_track``, a fraction of the track), a state
+    at rest or upright when left out."""
+    fields: dict = {}
+    for plant in PLANT_MODELS.values():
+        for st in plant.states:
+            name, unit = st.name, st.unit
+            if name in fields:
+                continue
+            if name in plant.rate_of and unit == "m":
+                fields[name] = (magnitude(MAX_DISTANCE_M), 0.0)
+                fields[f"{name}_track"] = (magnitude(0.5) | None, Field(default=None, description=(
+                    f"the {plant.body}'s offset as a fraction of the track length d between the switches: sized "
+                    "for whatever bench")))
+            elif name in plant.rate_of:  # an angle: the pendulum's within a half turn, an arm's a few turns
+                bound = math.pi if name == plant.angle else MAX_ARM_TURNS * 2 * math.pi
+                fields[name] = (magnitude(bound) | None, None)
+                fields[f"{name}_deg"] = (magnitude(math.degrees(bound)) | None, Field(default=None,
+                                                                                      validate_default=True))
+            else:
+                fields[name] = (magnitude(MAX_SPEED_M_S if unit == "m/s" else MAX_RATE_RAD_S), 0.0)
+    return fields
 
-    s: magnitude(MAX_DISTANCE_M) = 0.0
-    s_track: magnitude(0.5) | None = Field(default=None, description="the cart's offset as a fraction of the "
-                                           "track length d between the switches: sized for whatever bench")
-    theta: magnitude(math.pi) | None = None
-    theta_deg: magnitude(180.0) | None = Field(default=None, validate_default=True)
-    s_dot: magnitude(MAX_SPEED_M_S) = 0.0
-    theta_dot: magnitude(MAX_RATE_RAD_S) = 0.0
 
-    @field_validator("theta_deg", mode="after")
-    @classmethod
-    def _one_angle(cls, v, info: ValidationInfo):
-        if v is not None and info.data.get("theta") is not None:
-            raise ValueError("give theta (rad) or theta_deg, not both")
-        return v
+def _one_of_two(cls, v, info: ValidationInfo):
+    """An angle in rad or in degrees, a distance in metres or as a fraction of the track: not both."""
+    base, _, how = info.field_name.rpartition("_")
+    if v is not None and info.data.get(base):
+        unit = "m" if how == "track" else "rad"
+        raise ValueError(f"give {base} ({unit}) or {info.field_name}, not both")
+    return v
 
-    @field_validator("s_track", mode="after")
-    @classmethod
-    def _one_offset(cls, v, info: ValidationInfo):
-        if v is not None and info.data.get("s"):
-            raise ValueError("give s (m) or s_track (a fraction of the track), not both")
-        return v
 
-    def vector(self) -> tuple[float, float, float, float]:
-        """[s, theta, s_dot, theta_dot] in SI units."""
-        th = self.theta if self.theta is not None else math.radians(self.theta_deg or 0.0)
-        return (self.s, th, self.s_dot, self.theta_dot)
+class _Initial(InputModel):
+    """The initial state's methods (the fields are every plant's states: InitialState)."""
+
+    def vector(self, plant: PlantModel = CART) -> tuple[float, ...]:
+        """The plant's state at t = 0 in its order, SI units (an angle in degrees converted)."""
+        out = []
+        for name in plant.state_names:
+            v = getattr(self, name)
+            if v is None:
+                v = math.radians(getattr(self, f"{name}_deg") or 0.0)
+            out.append(float(v))
+        return tuple(out)
+
+    def stated(self) -> tuple[str, ...]:
+        """The fields the scenario sets (off their rest values)."""
+        return tuple(k for k in type(self).model_fields if getattr(self, k))
+
+    def foreign(self, plant: PlantModel) -> str | None:
+        """The first field set that is no state of ``plant`` (another plant's), else None."""
+        own = set(plant.state_names)
+        for k in self.stated():
+            base = k.rpartition("_")[0] if k.endswith(("_deg", "_track")) else k
+            if base not in own:
+                return k
+        return None
+
+
+InitialState = create_model(
+    "InitialState", __base__=_Initial, __module__=__name__,
+    __doc__="Plant state at t = 0 (SI units; an angle in rad or in degrees, not both; the cart in metres or as "
+            "a fraction of the track, not both): the pendulum within +/-180 deg, the cart within 100 m (and, "
+            "against a spec, inside its track), an arm within a few turns. Each plant reads its own states; "
+            "another plant's, set, is refused.",
+    __validators__={"one_of_two": field_validator(
+        *(k for k in _initial_fields() if k.endswith(("_deg", "_track"))), mode="after")(_one_of_two)},
+    **_initial_fields())
 
 
 _NEEDS = {"force_impulse": ("at", "duration_s", "force_N"), "step": ()}  # what a kind must have
-_ALLOWED = {"force_impulse": _NEEDS["force_impulse"] + ("arm_m",), "step": ("size_m", "size_track")}  # may have
-# (a step has one of its two sizes: Disturbance._one_size)
+_SIZES = ("size_m", "size_track", "size_rad", "size_deg")  # a step's: one of them (Disturbance._one_size)
+_ALLOWED = {"force_impulse": _NEEDS["force_impulse"] + ("arm_m",), "step": _SIZES}  # what a kind may have
 
 
 class Disturbance(InputModel):
     """A push or a command during the run.
 
-    ``force_impulse``: a horizontal force ``force_N`` on the pendulum tip or on the cart from
-    ``time_s`` for ``duration_s``. ``step``: the cart position command steps by ``size_m`` (or
-    ``size_track``, a fraction of the track length d) at ``time_s`` (an offset on the s sensor's
-    reference, so the loop moves the cart there).
+    ``force_impulse``: a horizontal force ``force_N`` on the pendulum tip, on the cart, or at the
+    end of a rotary pendulum's arm (along its path) from ``time_s`` for ``duration_s``. ``step``:
+    the position command steps at ``time_s`` (an offset on the position sensor's reference, so the
+    loop moves the cart or the arm there): a cart's by ``size_m`` (or ``size_track``, a fraction of
+    the track length d), an arm's by ``size_rad`` (or ``size_deg``).
     """
 
     kind: Literal["force_impulse", "step"]
     time_s: Real = bounded(0, MAX_DURATION_S)
-    at: Literal["pendulum_tip", "cart"] | None = Field(default=None, validate_default=True)
+    at: Literal["pendulum_tip", "cart", "arm"] | None = Field(default=None, validate_default=True)
     duration_s: Real | None = bounded(0, MAX_DURATION_S, open_lo=True, default=None, validate_default=True)
     force_N: magnitude(MAX_FORCE_N) | None = Field(default=None, validate_default=True)
+    size_rad: magnitude(MAX_ARM_TURNS * 2 * math.pi) | None = Field(default=None, validate_default=True)
+    size_deg: magnitude(MAX_ARM_TURNS * 360.0) | None = Field(default=None, validate_default=True)
     size_track: magnitude(1.0) | None = Field(default=None, validate_default=True)
     size_m: magnitude(MAX_DISTANCE_M) | None = Field(default=None, validate_default=True)
     arm_m: Real | None = bounded(0, MAX_DISTANCE_M, open_lo=True, default=None, validate_default=True,
@@ -98,11 +142,21 @@ class Disturbance(InputModel):
     def _one_size(cls, v, info: ValidationInfo):
         if info.data.get("kind") != "step":
             return v
-        if v is None and info.data.get("size_track") is None:
-            raise ValueError("missing field (needed for kind 'step'; or size_track, a fraction of the track)")
-        if v is not None and info.data.get("size_track") is not None:
+        given = [k for k in _SIZES if (v if k == "size_m" else info.data.get(k)) is not None]
+        if not given:
+            raise ValueError("missing field (needed for kind 'step'; or size_track, a fraction of the track; an "
+                             "arm's step: size_rad or size_deg)")
+        if given == ["size_m", "size_track"] or given == ["size_track", "size_m"]:
             raise ValueError("give size_m (m) or size_track (a fraction of the track), not both")
+        if len(given) > 1:
+            raise ValueError(f"give one size, not {' and '.join(given)}")
         return v
+
+    def step_size(self) -> float:
+        """A step's size in SI units of the position it moves (m, or rad from size_deg)."""
+        if self.size_deg is not None:
+            return math.radians(self.size_deg)
+        return self.size_rad if self.size_rad is not None else self.size_m
 
     @field_validator("arm_m", mode="after")
     @classmethod
@@ -111,7 +165,7 @@ class Disturbance(InputModel):
             raise ValueError("is where a push on the pendulum acts: only with at = 'pendulum_tip'")
         return v
 
-    @field_validator("at", "duration_s", "force_N", "size_m", "size_track", "arm_m", mode="after")
+    @field_validator("at", "duration_s", "force_N", *_SIZES, "arm_m", mode="after")
     @classmethod
     def _for_kind(cls, v, info: ValidationInfo):
         kind = info.data.get("kind")
@@ -137,7 +191,10 @@ class NoiseLevels(InputModel):
     theta: Level | None = None
     s_dot: Level | None = None
     amplifier: Level | None = None
+    alpha: Level | None = None  # a rotary pendulum's arm encoder
+    alpha_dot: Level | None = None
     cart_force_N: Annotated[Real, Field(ge=0, le=FORCE_LEVEL_MAX_N)] | None = None  # N rms
+    arm_torque_Nm: Annotated[Real, Field(ge=0, le=FORCE_LEVEL_MAX_N)] | None = None  # N m rms, on a rotary arm
     tip_force_N: Annotated[Real, Field(ge=0, le=FORCE_LEVEL_MAX_N)] | None = None  # N rms
 
     def level(self, name: str) -> float:
@@ -167,7 +224,7 @@ class Scenario(InputModel):
         """Whether anything disturbs the balanced pendulum: an initial state off rest, a push or
         step, or noise and random forces. Holding a scenario with none proves nothing."""
         levels = (self.noise.level(k) for k in NoiseLevels.model_fields if k != "mode")
-        return (any(self.initial.vector()) or bool(self.initial.s_track) or bool(self.disturbances)
+        return (bool(self.initial.stated()) or bool(self.disturbances)
                 or self.noise.mode == "profile" or (self.noise.mode == "explicit" and any(levels)))
 
     def judged(self) -> Scenario:
@@ -291,3 +348,49 @@ def check_on_track(sc: Scenario, track_m: float, spec_path: str) -> None:
     if abs(sc.initial.s) >= track_m / 2:
         raise InputError(sc.path, "initial.s", f"{sc.initial.s:g} m is outside the track: the limit switches of "
                          f"{spec_path} are at +/-{track_m / 2:g} m (plant.d = {track_m:g} m)")
+
+
+# what a disturbance field says of the plant it is for: a cart's sizes and push, an arm's
+_CART_ONLY, _ARM_ONLY = ("size_m", "size_track"), ("size_rad", "size_deg")
+
+
+def check_plant(sc: Scenario, plant: PlantModel, spec_path: str) -> None:
+    """The scenario speaks of ``plant``: its initial state names only the plant's states, a step
+    is sized as the plant's position is (a cart's in m, an arm's in rad), a push acts on the
+    pendulum or on the plant's own body.
+
+    Raises
+    ------
+    InputError
+        Naming the scenario's field, and the spec's plant.
+    """
+    foreign = sc.initial.foreign(plant)
+    if foreign is not None:
+        raise InputError(sc.path, f"initial.{foreign}", f"is no state of {spec_path}'s plant, a {plant.name} "
+                         f"(its states: {', '.join(plant.state_names)})")
+    unit = plant.units[plant.position]
+    for i, d in enumerate(sc.disturbances):
+        wrong = _ARM_ONLY if unit == "m" else _CART_ONLY
+        for k in wrong:
+            if getattr(d, k) is not None:
+                raise InputError(sc.path, f"disturbances[{i}].{k}", f"sizes another plant's step: {spec_path}'s "
+                                 f"{plant.position} is in {unit} ({', '.join(k for k in _SIZES if k not in wrong)})")
+        if d.at in ("cart", "arm") and d.at != plant.body:
+            raise InputError(sc.path, f"disturbances[{i}].at", f"{d.at!r}: {spec_path}'s plant has no {d.at} (a "
+                             f"{plant.name}: 'pendulum_tip' or {plant.body!r})")
+
+
+def check_on_arm(sc: Scenario, limit_rad: float, spec_path: str) -> None:
+    """A rotary pendulum's arm must start inside its cable's wind-up (``limit_rad``, the spec's
+    plant.alpha_limit), or the run would end before it starts.
+
+    Raises
+    ------
+    InputError
+        Naming the scenario's ``initial.alpha`` (or ``initial.alpha_deg``).
+    """
+    alpha = sc.initial.vector(ROTARY)[0]
+    if abs(alpha) >= limit_rad:
+        field = "initial.alpha_deg" if sc.initial.alpha_deg is not None else "initial.alpha"
+        raise InputError(sc.path, field, f"{math.degrees(alpha):g} deg is past the cable's wind-up of {spec_path} "
+                         f"at +/-{math.degrees(limit_rad):g} deg (plant.alpha_limit)")

@@ -10,16 +10,22 @@ from typing import NamedTuple
 from patchgen.bench import budget
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.resources import folder, resolve
-from patchgen.inputs.scenario import Scenario, check_on_track, load_scenario
+from patchgen.inputs.scenario import Scenario, check_on_arm, check_on_track, check_plant, load_scenario
 from patchgen.inputs.spec import DesignSpec, load_spec
-from patchgen.plant.plant_model import CART
+from patchgen.plant.plant_model import CART, PLANT_MODELS
 from patchgen.profiles.bench import BenchProfile, bench_source, check_reads, load_bench
 from patchgen.profiles.machine import MachineProfile, load_machine
 
 MAX_SPICE_POINTS = 10**6  # transient points of an ngspice run (duration / --step)
-# the plant models the patch and every stage after it take so far: the rotary pendulum is designed
-# (patchgen design) but not yet patched, simulated or checked
-PATCHED_PLANTS = (CART.name,)
+# the plant models each command takes: every one designs, patches, simulates, checks and exports
+# the rotary pendulum; the rest (spice, recommend, sweep, swingup, bench-test) take the cart so far
+EVERY_PLANT = tuple(PLANT_MODELS)
+COMMAND_PLANTS = {command: EVERY_PLANT for command in ("design", "patch", "simulate", "check", "export")}
+
+
+def plants_of(command: str) -> tuple[str, ...]:
+    """The plant models ``command`` takes (COMMAND_PLANTS; the cart alone for any other)."""
+    return COMMAND_PLANTS.get(command, (CART.name,))
 
 
 class Inputs(NamedTuple):
@@ -31,7 +37,7 @@ class Inputs(NamedTuple):
 
 
 def load_inputs(path: str, bench: str | None = None, bench_source_name: str = "bench",
-                machine: str | None = None, *, plants: tuple[str, ...] = PATCHED_PLANTS, command: str = "") -> Inputs:
+                machine: str | None = None, *, plants: tuple[str, ...] | None = None, command: str = "") -> Inputs:
     """The spec and the machine and bench profiles it names, each fully checked.
 
     Parameters
@@ -46,16 +52,18 @@ def load_inputs(path: str, bench: str | None = None, bench_source_name: str = "b
         A machine profile (a shipped id or a path) replacing the spec's ``machine``, in the spec
         too (a file by its absolute path), so that every later stage and a spec written from it
         (recommend's recommended.toml) name it; an error about it is the field ``machine``'s.
-    plants : tuple of str
-        The plant models the command takes (patchgen.plant.plant_model); another is refused.
+    plants : tuple of str, optional
+        The plant models the command takes (patchgen.plant.plant_model; by default ``command``'s,
+        plants_of); another is refused.
     command : str
         The command, as a refusal names it.
     """
     spec = load_spec(path)
+    plants = plants_of(command) if plants is None else plants
     if spec.plant.model not in plants:
+        takes = ", ".join(c for c, p in COMMAND_PLANTS.items() if spec.plant.model in p)
         raise InputError(spec.path, "plant.model", f"{spec.plant.model}: patchgen {command} takes the "
-                         f"{' or '.join(plants)} so far (the rotary pendulum is designed, with patchgen design; its "
-                         "patch, bench and checks are to come)")
+                         f"{' or '.join(plants)} so far (a {spec.plant.model} is taken by {takes})")
     name, source, field = (bench, bench_source_name, "") if bench is not None else (spec.bench, spec.path, "bench")
     profile = load_bench(name, source, field)
     if profile.plant != spec.plant.model:
@@ -77,8 +85,13 @@ def scenario_for(path: str, spec: DesignSpec, runs: int = 1, ideal: bool = False
     patchgen.bench.simulate, once the circuit's time constants are known)."""
     from patchgen.bench.engine import default_step
 
-    sc = load_scenario(path).on_track(spec.plant.d)  # fractions of the track in metres
-    check_on_track(sc, spec.plant.d, spec.path)
+    sc = load_scenario(path)
+    check_plant(sc, spec.plant_model, spec.path)
+    if spec.plant_model is CART:
+        sc = sc.on_track(spec.plant.d)  # fractions of the track in metres
+        check_on_track(sc, spec.plant.d, spec.path)
+    else:
+        check_on_arm(sc, spec.plant.alpha_limit, spec.path)
     step = sc.dt_s or default_step([], ideal)
     budget.check(sc, runs, step=step, stride=max(1, round(sc.record_dt_s / step)), history=True,
                  usual_step=default_step([], ideal))

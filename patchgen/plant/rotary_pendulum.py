@@ -44,6 +44,7 @@ ESTIMATED_RATES = (RATE_OF[POSITION], RATE_OF[ANGLE])
 SENSOR_LABELS = dict(zip(MEASURED, ("arm encoder", "pendulum encoder")))
 # How a patch sheet speaks of the plant (as patchgen.plant.cart_pendulum's)
 AT_REST = "the arm held at its centre, the pendulum hanging"
+LIMIT_EVENT = "cable wound up"  # what ends a run at the position's limit, as a table heads it
 BY_HAND = "the arm or the pendulum"
 HAND_WORDS = {POSITION: "turn the arm toward +α", ANGLE: "lean the pendulum toward +α"}
 SIGN_WORDS = ("+α is the way a positive u_c turns the arm; θ is positive when the pendulum leans the way +α moves "
@@ -80,4 +81,4 @@ FROM_ROD = ("l_r", "J_r", "l_p", "J_p")  # no default number: a uniform rod's wh
 REQUIRED = tuple(p.name for p in PARAMETERS if p.default is None and p.name not in FROM_ROD)
 UNCERTAIN = tuple(p.name for p in PARAMETERS if p.uncertain)  # what a sweep or a sensitivity may put off
 OPTIONAL = FROM_ROD  # left out, a uniform rod's
-STEP = 0.5  # rad: the arm's step scenario, over which a patch's amplitudes are scaled
+STEP = 0.3  # rad: sims/qube-arm-step.toml's step, over which a patch's amplitudes are scaled

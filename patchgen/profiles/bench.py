@@ -153,6 +153,11 @@ class BenchDisturbance(InputModel):
     tip_force_N_rms: Real = bounded(0, 1e3, default=ASSUMED_TIP_FORCE_N_RMS)
     bandwidth_Hz: Real = bounded(1e-3, 1e4, default=ASSUMED_FORCE_BANDWIDTH_HZ)
 
+    @property
+    def position_rms(self) -> float:
+        """The random generalised force on the position (the cart's, N)."""
+        return self.cart_force_N_rms
+
 
 class BenchTrack(InputModel):
     """The track: whether limit switches cut the power at its ends."""
@@ -221,6 +226,11 @@ class RotaryDisturbance(InputModel):
     arm_torque_Nm_rms: Real = bounded(0, 1e2, default=ASSUMED_ARM_TORQUE_NM_RMS)
     tip_force_N_rms: Real = bounded(0, 1e3, default=ASSUMED_TIP_FORCE_N_RMS / 10)
     bandwidth_Hz: Real = bounded(1e-3, 1e4, default=ASSUMED_FORCE_BANDWIDTH_HZ)
+
+    @property
+    def position_rms(self) -> float:
+        """The random generalised force on the position (the arm's torque, N m)."""
+        return self.arm_torque_Nm_rms
 
 
 NO_TRACK = BenchTrack(limit_switches=False)  # a rotary bench's: no switches, no watchdog

@@ -4,6 +4,7 @@ the ranges; and a patch's files with that section first on its sheet."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from pathlib import PurePath
 from typing import TYPE_CHECKING
@@ -13,6 +14,7 @@ from patchgen.patch.as_patched import AsPatched
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.patch import PatchReport
 from patchgen.pipeline.prediction import BenchPrediction
+from patchgen.plant.plant_model import CART, PlantModel
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.profiles.uncertainty import UNITS
@@ -44,14 +46,22 @@ def bench_section(pred: BenchPrediction, d: Design, machine: MachineProfile, ben
     SheetSection
         One row per scenario and a note naming the bench's figures and the linearised loop.
     """
-    header, rows = prediction_rows(pred.predictions)
-    dist = bench.disturbance
+    header, rows = prediction_rows(pred.predictions, d.spec.plant_model)
+    dist, pm = bench.disturbance, d.spec.plant_model
+    if pm is CART:
+        randoms = (f"random forces {dist.cart_force_N_rms:g} N rms on the cart and {dist.tip_force_N_rms:g} "
+                   f"N rms at the tip")
+        ends = f"switches at +/-{d.spec.plant.d / 2:g} m"
+    else:
+        randoms = (f"a random torque {dist.arm_torque_Nm_rms:g} N m rms on the arm and force "
+                   f"{dist.tip_force_N_rms:g} N rms at the tip")
+        limit = d.spec.plant.alpha_limit
+        ends = f"the cable's wind-up at +/-{math.degrees(limit):g} deg" if math.isfinite(limit) else "no cable limit"
     note = (f"From this netlist on the {bench_named(bench)}: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
-            f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} N; sensor noise; random "
-            f"forces {dist.cart_force_N_rms:g} N rms on the cart and {dist.tip_force_N_rms:g} "
-            f"N rms at the tip (to {dist.bandwidth_Hz:g} Hz); drift "
+            f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} {pm.input_unit}; "
+            f"sensor noise; {randoms} (to {dist.bandwidth_Hz:g} Hz); drift "
             f"{_drift_text(net, machine)} ({machine.imperfections.drift_source}); "
-            f"rails +/-{machine.imperfections.saturation_V:g} V; switches at +/-{d.spec.plant.d / 2:g} m. "
+            f"rails +/-{machine.imperfections.saturation_V:g} V; {ends}. "
             + diagnosis_note(pred) + (" " + ranges_note(pred.corners) if pred.corners is not None else ""))
     return SheetSection("Predicted on the bench", header, rows, note, banner=failure_banner(bench.id, pred))
 
@@ -82,10 +92,10 @@ def levels_section(pred: BenchPrediction, net: Netlist) -> SheetSection:
                         rows, note)
 
 
-def prediction_rows(preds: Sequence[Prediction]) -> tuple[list[str], list[list[str]]]:
-    """The predictions as a table for the patch sheet: (header, rows of text)."""
-    header = ["scenario", "runs", "held", "limit switch (run 0)", "fallen (run 0)", "max |theta| (deg)",
-              "max |s| (m)", "overloads"]
+def prediction_rows(preds: Sequence[Prediction], plant: PlantModel = CART) -> tuple[list[str], list[list[str]]]:
+    """The predictions as a table for the patch sheet: (header, rows of text), in the plant's words."""
+    header = ["scenario", "runs", "held", f"{plant.limit_event} (run 0)", "fallen (run 0)", "max |theta| (deg)",
+              plant.position_heading(), "overloads"]
     rows = []
     for p in preds:
         rows.append([p.scenario, str(p.runs), f"{100 * p.fraction_held:.0f} %",

@@ -10,6 +10,7 @@ from rich.table import Table
 
 from patchgen.bench.results import SimResult
 from patchgen.pipeline.simulate import SimulateReport
+from patchgen.plant.plant_model import CART, PLANT_MODELS
 from patchgen.render.terminal import add_row, number, show, table, text, tidy
 from patchgen.studies import bench_corners, worst_case
 
@@ -55,16 +56,19 @@ def summary_table(result: SimResult) -> Table:
         return (f"{100 * x:.1f} %", "")
 
     over = [f"{o.amplifier} at {o.first_time_s:.2f} s" for o in r0.overloads]
+    pm = PLANT_MODELS[result.settings.plant]
     rows = [
-        ("held (up, inside the switches)", "yes" if r0.held else "no", *share(d.fraction_held)),
-        ("limit switch tripped" if result.settings.watchdog_m is None else "switch or watchdog tripped",
+        ("held (up, inside the switches)" if pm is CART else f"held (up, not {pm.limit_event})",
+         "yes" if r0.held else "no", *share(d.fraction_held)),
+        (pm.limit_event if pm is not CART else "limit switch tripped"
+         if result.settings.watchdog_m is None else "switch or watchdog tripped",
          when(r0.limit_switch_tripped, r0.trip_time_s), *share(d.fraction_tripped)),
         ("  when (s)", "", *_p(d, "trip_time_s")),
         (f"pendulum fallen past {result.scenario.fall_angle_deg:g} deg", when(r0.fallen, r0.fall_time_s),
          *share(d.fraction_fallen)),
         ("  when (s)", "", *_p(d, "fall_time_s")),
         ("max |theta| (deg)", f"{r0.max_abs_theta_deg:.2f}", *_p(d, "max_abs_theta_deg")),
-        ("max |s| (m)", f"{r0.max_abs_s_m:.3f}", *_p(d, "max_abs_s_m")),
+        (pm.position_heading(), f"{r0.max_abs_s_m:.3f}", *_p(d, "max_abs_s_m")),
         ("RMS theta (deg)", f"{r0.rms_theta_deg:.3f}", *_p(d, "rms_theta_deg")),
         ("max |u_c| (V)", f"{r0.max_abs_u_c_V:.2f}", *_p(d, "max_abs_u_c_V")),
         ("overloads (amplifier at time)", _overloads(over), *share(d.fraction_overloaded)),

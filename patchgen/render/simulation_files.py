@@ -13,13 +13,19 @@ import math
 import numpy as np
 
 from patchgen.bench.results import SimResult
-from patchgen.plant.cart_pendulum import POSITION, STATE_UNITS
+from patchgen.plant.plant_model import CART, PLANT_MODELS, PlantModel
 from patchgen.render import plot_helper
 from patchgen.render.outputs import json_text
 
 FONT_SIZE = 8  # points: the plot's text, small enough for a panel 1.5 inches high
-_UNITS = {"t": "s", **{q: u.replace("/", "_per_") for q, u in STATE_UNITS.items()},  # a column name's unit
-          "s_ref": STATE_UNITS[POSITION], "u_c": "V", "force": "N"}
+
+
+def _units(pm: PlantModel) -> dict[str, str]:
+    """A history column name's unit, by channel (the amplifiers' are volts)."""
+    units = {"t": "s", **{q: u.replace("/", "_per_") for q, u in pm.units.items()},
+             f"{pm.position}_ref": pm.units[pm.position], "u_c": "V"}
+    units["force" if pm is CART else pm.input] = pm.input_unit
+    return units
 
 
 def output_files(result: SimResult, svg: bool = False, summary: dict | None = None) -> dict[str, bytes]:
@@ -43,7 +49,7 @@ def output_files(result: SimResult, svg: bool = False, summary: dict | None = No
     plot = plot_helper.submit(_plot, result, svg) if result.history is not None else None
     files = {}
     if result.history is not None:
-        files["history.csv"] = _history_csv(result.history).encode()
+        files["history.csv"] = _history_csv(result.history, PLANT_MODELS[result.settings.plant]).encode()
     files["runs.csv"] = _runs_csv(result).encode()
     files["summary.json"] = json_text(result.summary() if summary is None else summary).encode()
     if plot is not None:
@@ -51,10 +57,11 @@ def output_files(result: SimResult, svg: bool = False, summary: dict | None = No
     return files
 
 
-def _history_csv(history: dict[str, np.ndarray]) -> str:
+def _history_csv(history: dict[str, np.ndarray], pm: PlantModel = CART) -> str:
     """The history's channels as columns, named with their units."""
     names = list(history)
-    header = [f"{n}_{_UNITS.get(n, 'V')}" for n in names]
+    units = _units(pm)
+    header = [f"{n}_{units.get(n, 'V')}" for n in names]
     cols = np.column_stack([history[n] for n in names])
     buf = io.StringIO()
     buf.write(",".join(header) + "\n")
@@ -73,9 +80,12 @@ def _runs_csv(result: SimResult) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     drawn = [name for name, _ in result.runs[0].drawn] if result.runs else []
+    pm = PLANT_MODELS[result.settings.plant]
+    position = "s_m" if pm is CART else f"{pm.position}_{pm.units[pm.position]}"
+    drive = "force_N" if pm is CART else f"{pm.input}_{pm.input_unit}"
     w.writerow(["run", "held", "limit_switch_tripped", "trip_time_s", "fallen",
-                "fall_time_s", "max_abs_theta_deg", "max_abs_s_m", "rms_theta_deg",
-                "max_abs_u_c_V", "max_abs_force_N", "overloads", "actuator_limit_time_s"]
+                "fall_time_s", "max_abs_theta_deg", f"max_abs_{position}", "rms_theta_deg",
+                "max_abs_u_c_V", f"max_abs_{drive}", "overloads", "actuator_limit_time_s"]
                + [f"drawn {n}" for n in drawn])
     for r in result.runs:
         w.writerow([r.run, int(r.held), int(r.limit_switch_tripped), _num(r.trip_time_s),
@@ -124,10 +134,13 @@ def history_figure(result: SimResult):
     first = result.runs[0]
     sat = result.settings.saturation_V
     out_amp = [a for a in result.amplifiers if np.array_equal(h[a], h["u_c"])][:1]
-    panels = [("s (m)", [("s", h["s"]), ("s_ref", h["s_ref"])], None),
+    pm = PLANT_MODELS[result.settings.plant]
+    pos, ref, drive = pm.position, f"{pm.position}_ref", "force" if pm is CART else pm.input
+    event = "limit switch" if pm is CART else pm.limit_event
+    panels = [(f"{pos} ({pm.units[pos]})", [(pos, h[pos]), (ref, h[ref])], None),
               (plotting.THETA_LABEL, [("theta", h["theta"])], None),
               (f"u_c = {out_amp[0]} (V)" if out_amp else "u_c (V)", [("u_c", h["u_c"])], sat if out_amp else None),
-              ("force (N)", [("force", h["force"])], None)]
+              (f"{drive} ({pm.input_unit})", [(drive, h[drive])], None)]
     panels += [(_amp_label(result, a), [(a, h[a])], sat) for a in result.amplifiers if a not in out_amp]
     fig, axes = plotting.stacked(8.0, 1.5 * len(panels) + 0.8, len(panels), top_in=0.65)
     cols = plotting.columns(fig)
@@ -140,7 +153,7 @@ def history_figure(result: SimResult):
             ax.axhline(-rail, color="tab:red", lw=0.6, ls="--")
         if first.trip_time_s is not None:
             ax.axvline(first.trip_time_s, color="black", lw=0.6, ls=":",
-                       label=f"limit switch {first.trip_time_s:.2f} s")
+                       label=f"{event} {first.trip_time_s:.2f} s")
         if first.fall_time_s is not None:
             ax.axvline(first.fall_time_s, color="tab:purple", lw=0.6, ls=":", label=f"fallen {first.fall_time_s:.2f} s")
         ax.set_ylabel(label)
@@ -150,7 +163,7 @@ def history_figure(result: SimResult):
     mode = "ideal" if result.ideal else f"bench {result.bench}"
     events = []
     if first.trip_time_s is not None:
-        events.append(f"limit switch at {first.trip_time_s:.2f} s")
+        events.append(f"{event} at {first.trip_time_s:.2f} s")
     if first.fall_time_s is not None:
         events.append(f"fallen at {first.fall_time_s:.2f} s")
     fig.suptitle(f"{result.design} / {result.scenario.name} / {mode} / seed {result.seed}: "

@@ -65,7 +65,7 @@ def test_bad_scenario_field_one_line(tmp_path):
 
 
 @pytest.mark.skipif(shutil.which("ngspice") is None, reason="ngspice not installed")
-@pytest.mark.parametrize("name", patched_designs())
+@pytest.mark.parametrize("name", patched_designs("spice"))
 def test_spice_ideal_agrees_within_one_percent(tmp_path, name):
     # the ideal run does not clip: a scenario in which the patch stays inside the reference (a patch
     # of Quanser's own weights asks 33 V from 10 deg and leaves it; a tap on its bench does not)

@@ -188,7 +188,7 @@ def _run(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "patchgen", *args], capture_output=True, text=True, cwd=ROOT)
 
 
-def test_the_cli_designs_the_qube_and_refuses_to_patch_it(tmp_path):
+def test_the_cli_designs_and_patches_the_qube_and_refuses_what_takes_the_cart_alone(tmp_path):
     r = _run("design", QUBE, "--json")
     assert r.returncode == 0, r.stderr
     got = json.loads(r.stdout)
@@ -196,9 +196,12 @@ def test_the_cli_designs_the_qube_and_refuses_to_patch_it(tmp_path):
     assert got["control_law"] == "u = -K x (u: voltage on the arm's motor, V)"
     np.testing.assert_allclose(got["K"], patchgen.load_design(QUBE).K[0], rtol=1e-12)
     assert set(got["zeros"]) == {"alpha/V_m", "alpha_dot/V_m"}
-    for command in (["patch", QUBE, "-o", str(tmp_path / "out")],
-                    ["simulate", QUBE, "--scenario", "offset-10deg", "-o", str(tmp_path / "sim")]):
+    r = _run("patch", QUBE, "-o", str(tmp_path / "patch"))
+    assert r.returncode == 0, r.stderr
+    assert "the arm held at its centre" in (tmp_path / "patch" / "patch-sheet.md").read_text()
+    for command in (["sweep", QUBE], ["recommend", QUBE, "-o", str(tmp_path / "rec")]):
         r = _run(*command)
         assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
         assert "plant.model" in r.stderr and "rotary-pendulum" in r.stderr and "Traceback" not in r.stderr
-    assert not (tmp_path / "out").exists() and not (tmp_path / "sim").exists()
+        assert "taken by design, patch, simulate, check, export" in r.stderr
+    assert not (tmp_path / "rec").exists()

@@ -28,7 +28,8 @@ def checked():
         made = patch_of(name, machine)
         if made is not None:
             report, profile, _ = made
-            out[f"{name}-{machine}"] = (report.netlist, profile, sign_check(report.netlist, profile))
+            plant = report.design.spec.plant_model  # whose position and angle are moved by hand
+            out[f"{name}-{machine}"] = (report.netlist, profile, sign_check(report.netlist, profile, plant), plant)
     return out
 
 
@@ -60,7 +61,7 @@ def _expected(net: Netlist, step: SignStep, flip: str | None = None) -> float:
 
 
 def test_a_step_per_pot_each_moving_what_a_person_can_move(checked):
-    for key, (net, machine, steps) in checked.items():
+    for key, (net, machine, steps, plant) in checked.items():
         assert [s.pot for s in steps] == [p.id for p in net.pots], key
         sensors = {s.id: s.quantity for s in net.sensors}
         roles = {a.id: a.role for a in net.amplifiers}
@@ -69,10 +70,11 @@ def test_a_step_per_pot_each_moving_what_a_person_can_move(checked):
             assert s.on[0] == s.pot and set(s.on) <= {p.id for p in net.pots}, (key, s)
             d = s.drive
             if d.kind == "hand":
-                assert sensors[d.target] in ("s", "theta"), (key, s)  # the cart's position, the pendulum's angle
+                assert sensors[d.target] in (plant.position, plant.angle), (key, s)  # moved by hand
                 continue
             assert d.kind in ("input", "ic"), (key, s)
-            assert (sensors[d.target] not in ("s", "theta")) if d.kind == "input" else roles[d.target] == "integrator"
+            assert ((sensors[d.target] not in (plant.position, plant.angle)) if d.kind == "input"
+                    else roles[d.target] == "integrator")
             m = re.fullmatch(r"spare pot (\S+) at ([0-9.]+) from ([+−])10 V", d.source)
             assert m and m.group(1) == free[0], (key, s)
             assert float(m.group(2)) * 10 == pytest.approx(abs(d.volts)) and 0 < float(m.group(2)) <= 1
@@ -80,7 +82,7 @@ def test_a_step_per_pot_each_moving_what_a_person_can_move(checked):
 
 
 def test_every_step_expects_what_the_patch_does_and_sees_its_pots_sign(checked):
-    for key, (net, _, steps) in checked.items():
+    for key, (net, _, steps, _) in checked.items():
         for s in steps:
             value = _expected(net, s)
             assert np.sign(value) == s.expect and abs(value) > 1e-9, (key, s, value)
@@ -90,7 +92,7 @@ def test_every_step_expects_what_the_patch_does_and_sees_its_pots_sign(checked):
 def test_the_internal_signs_are_checked_through_a_sensor_or_a_test_voltage(checked):
     """bench-recommended's pots from u_c, the actuator state and its own feedback: each moved from
     the cart or through the integrator's IC jack, read where it shows."""
-    net, _, steps = checked["bench-recommended-gp6"]
+    net, _, steps, _ = checked["bench-recommended-gp6"]
     by = {s.pot: s for s in steps}
     assert net.pot("P1").source == "A6" and (by["P1"].drive.kind, by["P1"].drive.target) == ("hand", "s")
     assert by["P1"].on == ("P1", "P3") and by["P1"].read == "A1" and by["P1"].ramp
@@ -100,12 +102,13 @@ def test_the_internal_signs_are_checked_through_a_sensor_or_a_test_voltage(check
 
 
 def test_the_sheet_asks_only_for_moves(checked):
-    pattern = re.compile(r"(move the cart|lean the pendulum) toward \+s by hand(, read while it moves)?"
+    pattern = re.compile(r"(move the cart toward \+s|lean the pendulum toward \+s|turn the arm toward \+α|"
+                         r"lean the pendulum toward \+α) by hand(, read while it moves)?"
                          r"|\S+ input at [+−][0-9.]+ V \(spare pot \S+ at [0-9.]+ from [+−]10 V\), its sensor cord out"
                          r"|(\S+)'s IC (jack|input) at [+−][0-9.]+ V \(spare pot \S+ at [0-9.]+ from [+−]10 V\): "
                          r"(\S+) at [+−][0-9.]+ V")
-    for key, (net, machine, steps) in checked.items():
-        for row in sign_rows(steps, net, machine.procedure.ic_input):
+    for key, (net, machine, steps, plant) in checked.items():
+        for row in sign_rows(steps, net, machine.procedure.ic_input, plant):
             assert pattern.fullmatch(row["move"]), (key, row)
             assert "positive" not in row["move"].lower()
             assert row["way"] in ("+", "−", "+ while it moves", "− while it moves", "rises", "falls",

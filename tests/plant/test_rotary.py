@@ -17,7 +17,9 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from patchgen.plant.qube_servo2 import ENCODER_STEP_RAD, QUBE_SERVO_2, VOLTAGE_LIMIT_V
-from patchgen.plant.rotary_compiled import ROTARY_VECTOR, rotary_rhs, rotary_vector
+from patchgen.plant.rotary_compiled import N_ROTARY_COEF, ROTARY_VECTOR, rotary_rhs, rotary_vector
+from patchgen.plant.rotary_compiled import rotary_accel as _accel
+from patchgen.plant.rotary_compiled import rotary_coefficients as _coefficients
 from patchgen.plant.rotary_equations import RotaryParams, fallen, linear_matrices, nonlinear_rhs, wound_up
 from patchgen.plant.rotary_pendulum import FROM_ROD, PARAMETER_NAMES, PARAMETERS, REQUIRED, STATE_NAMES
 
@@ -271,3 +273,47 @@ def test_the_events_that_end_a_run():
 def test_only_an_equilibrium_is_linearised():
     with pytest.raises(ValueError, match="no equilibrium"):
         linear_matrices(QUBE_SERVO_2, 0.3)
+
+
+# ---- the lanes' form: per-plant constants, a torque on the arm and a force at the tip ------------
+
+def _lanes_accel(plant: RotaryParams, x, V_m: float, torque: float, tip: float) -> np.ndarray:
+    q = np.empty((N_ROTARY_COEF, 1))
+    _coefficients(rotary_vector(plant), q[:, 0])
+    add, thdd = _accel(q, 0, math.sin(x[1]), math.cos(x[1]), x[2], x[3], V_m, torque, tip)
+    return np.array([x[2], x[3], add, thdd])
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_lanes_form_is_the_equations(seed):
+    """Without a torque or a tip force, the kernel's form equals nonlinear_rhs to rounding (the
+    constants are folded first, so not bit for bit: to 1e-12 of the accelerations' scale)."""
+    rng = np.random.default_rng(seed)
+    for plant in [QUBE_SERVO_2] + [_random_plant(rng) for _ in range(24)]:
+        for _ in range(8):
+            x = np.array([rng.uniform(-10, 10), rng.uniform(-7, 7), rng.uniform(-30, 30), rng.uniform(-30, 30)])
+            V_m = rng.uniform(-12, 12)
+            want = nonlinear_rhs(x, V_m, plant)
+            got = _lanes_accel(plant, x, V_m, 0.0, 0.0)
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.abs(want).max())
+
+
+@settings(max_examples=60, deadline=None)
+@given(plants(), st.floats(-math.pi, math.pi), st.floats(-10.0, 10.0), st.floats(-20.0, 20.0),
+       st.floats(-10.0, 10.0), st.floats(-0.05, 0.05), st.floats(-1.0, 1.0))
+def test_a_torque_and_a_tip_force_do_the_work_they_should(plant, th, ad, thd, V_m, torque, tip):
+    """dE/dt with the lanes' form is the motor's and damping's power plus torque alpha' plus the tip
+    force times the tip's speed along it: L_r alpha' + L_p cos(theta) theta', from where the tip is
+    (the arm's end, then L_p along the pendulum), not from the equations."""
+    x = np.array([0.2, th, ad, thd])
+    f = _lanes_accel(plant, x, V_m, torque, tip)
+    dT, dV = (e.imag / 1e-30 for e in energies(plant, x + 1e-30j * f))
+    tau = plant.k_t * (V_m - plant.k_m * ad) / plant.R_m
+    speed = plant.L_r * ad + plant.L_p * math.cos(th) * thd
+    want = tau * ad - plant.D_r * ad ** 2 - plant.D_p * thd ** 2 + torque * ad + tip * speed
+    l_r, l_p = plant.arm_com(), plant.pendulum_com()
+    inertia = (plant.arm_inertia() + plant.m_r * l_r ** 2 + plant.m_p * plant.L_r ** 2 + plant.pendulum_inertia()
+               + plant.m_p * l_p ** 2)
+    torques = (abs(tau) + abs(torque) + abs(tip) * (plant.L_r + plant.L_p) + plant.D_r * abs(ad)
+               + plant.D_p * abs(thd) + plant.m_p * plant.g * l_p + inertia * (ad ** 2 + thd ** 2))
+    assert dT + dV == pytest.approx(want, abs=1e-9 * (abs(ad) + abs(thd)) * torques)

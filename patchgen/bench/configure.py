@@ -37,7 +37,7 @@ from patchgen.bench.noise_drift import NoiseAndDrift, noise_and_drift
 from patchgen.bench.results import SimSettings
 from patchgen.inputs.drive_fields import LAG_MODELS, motor_of
 from patchgen.inputs.errors import InputError
-from patchgen.inputs.scenario import Scenario
+from patchgen.inputs.scenario import Scenario, check_plant
 from patchgen.plant.compiled import P_HALF_TRACK, VECTOR_PARAMETERS, plant_vector
 from patchgen.plant.drive import with_rotor
 from patchgen.plant.equations import PlantParams
@@ -105,6 +105,9 @@ def engine_config(circuit: Circuit, plant: PlantParams | RotaryParams, bench: Be
     if pm is CART:
         scenario = scenario.on_track(plant.d)  # an offset or step given as a fraction of the track, in metres
         scenario = scenario.on_pendulum(plant)  # a push at a stated point of the pendulum: on the cart and at l
+    else:
+        scenario = scenario.on_arm(plant)  # a push at a stated point of the pendulum: at the tip and the arm's end
+    check_plant(scenario, pm, "this run")  # another plant's scenario: named, not simulated
     levels = noise_and_drift(circuit.sensor_ids, bench, machine, scenario, ideal)
     sensor_rms, amp_rms, drift = levels.sensor_V_rms, levels.amplifier_V_rms, levels.drift_V_per_s
     s_proc = [noise_process(sensor_rms[s], levels.sensor_bandwidth_Hz, step)
@@ -257,20 +260,13 @@ def _sensors(circuit: Circuit, bench: BenchProfile, ideal: bool) -> Sensors:
 
 
 def _pushes(d, plant: PlantParams | RotaryParams) -> list[tuple[int, float]]:
-    """A scenario's push as the kernel's channels take it, (DIST_* kind, value): on a cart, a force
-    at the tip or on the cart (N; a push at a stated point is already shared out, Scenario.on_pendulum);
-    on a rotary pendulum, a force at the pendulum's tip (N) and a torque on the arm (N m) from a
-    push at the arm's end (force x L_r), a push at arm_m along the pendulum being both: arm_m / L_p
-    of it at the tip, the rest's lever on the arm."""
-    if isinstance(plant, PlantParams):
-        return [(DIST_TIP_FORCE if d.at == "pendulum_tip" else DIST_CART_FORCE, d.force_N)]
-    if d.at == "arm":
-        return [(DIST_CART_FORCE, d.force_N * plant.L_r)]
-    share = 1.0 if d.arm_m is None else d.arm_m / plant.L_p
-    out = [(DIST_TIP_FORCE, d.force_N * share)]
-    if share != 1.0:
-        out.append((DIST_CART_FORCE, d.force_N * (1.0 - share) * plant.L_r))
-    return out
+    """A scenario's push as the kernel's channels take it, (DIST_* kind, value): a force at the
+    pendulum's tip (N), or on the position: a cart's force (N), a rotary arm's torque (N m: a push
+    at its end times L_r). A push at a stated point is already shared out (Scenario.on_pendulum,
+    Scenario.on_arm)."""
+    if d.at == "pendulum_tip":
+        return [(DIST_TIP_FORCE, d.force_N)]
+    return [(DIST_CART_FORCE, d.force_N * (plant.L_r if d.at == "arm" else 1.0))]
 
 
 def _drifts(circuit: Circuit, levels: NoiseAndDrift, machine: MachineProfile) -> np.ndarray:

@@ -265,6 +265,24 @@ class Scenario(InputModel):
                 out.append(x.model_copy(update={"force_N": x.force_N * cart, "arm_m": None, "at": "cart"}))
         return self.model_copy(update={"disturbances": out})
 
+    def on_arm(self, plant) -> Scenario:
+        """The scenario's pushes as the simulator applies them to a rotary pendulum (a RotaryParams):
+        a push on the pendulum at ``arm_m`` from its pivot does its work as arm_m / L_p of it at the
+        tip and the rest at the arm's end (the same generalised forces: F L_r on the arm, F arm_m
+        cos(theta) on the pendulum); one at the tip, or at the arm's end, stays as it is."""
+        if all(x.arm_m is None for x in self.disturbances):
+            return self
+        out = []
+        for x in self.disturbances:
+            if x.arm_m is None:
+                out.append(x)
+                continue
+            share = x.arm_m / plant.L_p
+            out.append(x.model_copy(update={"force_N": x.force_N * share, "arm_m": None}))
+            if share != 1.0:
+                out.append(x.model_copy(update={"force_N": x.force_N * (1.0 - share), "arm_m": None, "at": "arm"}))
+        return self.model_copy(update={"disturbances": out})
+
     @property
     def path(self) -> str:
         """The file it was read from (or a label for a scenario built in code)."""
@@ -394,3 +412,13 @@ def check_on_arm(sc: Scenario, limit_rad: float, spec_path: str) -> None:
         field = "initial.alpha_deg" if sc.initial.alpha_deg is not None else "initial.alpha"
         raise InputError(sc.path, field, f"{math.degrees(alpha):g} deg is past the cable's wind-up of {spec_path} "
                          f"at +/-{math.degrees(limit_rad):g} deg (plant.alpha_limit)")
+
+
+def fits(sc: Scenario, plant: PlantModel) -> bool:
+    """Whether the scenario speaks of ``plant`` (check_plant passes): a step-cart is no rotary
+    pendulum's scenario, an arm's step no cart's; a release or a tap at the tip is either's."""
+    try:
+        check_plant(sc, plant, "")
+    except InputError:
+        return False
+    return True

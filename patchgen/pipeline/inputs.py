@@ -17,10 +17,10 @@ from patchgen.profiles.bench import BenchProfile, bench_source, check_reads, loa
 from patchgen.profiles.machine import MachineProfile, load_machine
 
 MAX_SPICE_POINTS = 10**6  # transient points of an ngspice run (duration / --step)
-# the plant models each command takes: every one designs, patches, simulates, checks and exports
-# the rotary pendulum; the rest (spice, recommend, sweep, swingup, bench-test) take the cart so far
+# the plant models each command takes: design, patch, simulate, check, export and spice take the
+# rotary pendulum too; the rest (recommend, sweep, swingup, bench-test) take the cart so far
 EVERY_PLANT = tuple(PLANT_MODELS)
-COMMAND_PLANTS = {command: EVERY_PLANT for command in ("design", "patch", "simulate", "check", "export")}
+COMMAND_PLANTS = {command: EVERY_PLANT for command in ("design", "patch", "simulate", "check", "export", "spice")}
 
 
 def plants_of(command: str) -> tuple[str, ...]:

@@ -28,6 +28,7 @@ from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
 from patchgen.pipeline.scaling import scaled_patch
 from patchgen.plant.equations import PlantParams
+from patchgen.plant.plant_model import CART
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.spice.compare import Comparison, compare
@@ -132,10 +133,12 @@ def spice_job(inputs: Inputs, scenario: Scenario, plan: SpicePlan) -> SpiceJob:
     levels = noise_and_drift([s.id for s in net.sensors], bench, machine, scenario, plan.ideal)
     noisy = {} if plan.ideal else {"reltol": NOISY_RELTOL, "noise_step_s": engine_step(net, plant, bench, machine,
                                                                                         scenario)}
+    pm = spec.plant_model
+    pushes = scenario.on_pendulum(plant) if pm is CART else scenario.on_arm(plant)
     settings = SpiceSettings(duration_s=scenario.duration_s, step_s=plan.step_s,
-                             x0=tuple(scenario.initial.vector()), noise_and_drift=levels,
+                             x0=tuple(scenario.initial.vector(pm)), noise_and_drift=levels,
                              actuator="ideal" if plan.ideal else "bench", seed=scenario.seed,
-                             disturbances=tuple(scenario.on_pendulum(plant).disturbances), **noisy)
+                             disturbances=tuple(pushes.disturbances), **noisy)
     deck = spice_deck(_settled(net, plant, bench, machine, scenario), plant, bench, machine, settings)
     return SpiceJob(d, net, plant, bench, machine, scenario, plan, deck, settings)
 
@@ -179,7 +182,8 @@ def run_spice(job: SpiceJob) -> SpiceReport:
     every_step = job.scenario.model_copy(update={"record_dt_s": RECORD_EVERY_STEP_S})
     runs = 1 if job.plan.ideal else MC_RUNS
     own = simulate(job.netlist, job.plant, job.bench, job.machine, every_step, ideal=job.plan.ideal, runs=runs)
-    cmp = compare(result, _Own(own.history))
+    pm = job.design.spec.plant_model
+    cmp = compare(result, _Own(own.history), (pm.angle, pm.position))
     if job.plan.ideal:
         return SpiceReport(job, cmp, result.run_time_s, data)
     return SpiceReport(job, cmp, result.run_time_s, data, statistical_verdict(_figures(job, result), own.runs))
@@ -187,6 +191,10 @@ def run_spice(job: SpiceJob) -> SpiceReport:
 
 def _figures(job: SpiceJob, result: SpiceResult):
     """ngspice's run's figures, counted as the engine counts a run's."""
-    cut = job.bench.track.cut_at(job.plant.d)
-    return run_figures(result.t, result.signals["s"], result.signals["theta"], cut,
+    pm = job.design.spec.plant_model
+    if pm is CART:
+        cut = job.bench.track.cut_at(job.plant.d)
+    else:  # the cable's wind-up ends a rotary pendulum's run
+        cut = job.plant.alpha_limit if math.isfinite(job.plant.alpha_limit) else None
+    return run_figures(result.t, result.signals[pm.position], result.signals[pm.angle], cut,
                        math.radians(job.scenario.fall_angle_deg))

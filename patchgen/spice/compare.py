@@ -19,7 +19,7 @@ from typing import Protocol
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
-from patchgen.plant.cart_pendulum import RATE_OF
+from patchgen.plant.plant_model import PLANT_MODELS
 
 
 class Trajectory(Protocol):
@@ -69,7 +69,7 @@ class Comparison:
 
 
 # a signal and its time derivative, both recorded by patchgen (for cubic Hermite interpolation)
-DERIVATIVE = RATE_OF
+DERIVATIVE = {k: v for pm in PLANT_MODELS.values() for k, v in pm.rate_of.items()}
 PLOT_POINTS = 2001  # the overlay plot's points (the comparison itself uses every ngspice point)
 
 

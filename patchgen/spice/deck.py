@@ -30,9 +30,10 @@ from patchgen.inputs.scenario import Disturbance
 from patchgen.patch.netlist import Amplifier, Netlist, Pot
 from patchgen.patch.parts import parts_for
 from patchgen.patch.reading import Reading, Stage, read
-from patchgen.plant.cart_pendulum import POSITION, POSITION_OF
 from patchgen.plant.drive import with_rotor
-from patchgen.plant.equations import PLANT_STATES, PlantParams
+from patchgen.plant.equations import PlantParams
+from patchgen.plant.plant_model import CART, PLANT_MODELS, PlantModel
+from patchgen.plant.rotary_equations import RotaryParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.spice.elements import DeckLines, bound, clamp, num, pot_wiper_position, spice_name, state_integrator
@@ -45,6 +46,8 @@ from patchgen.spice.plant import (
     actuator,
     cart_pendulum,
     disturbances,
+    rotary_pendulum,
+    state_nodes,
 )
 
 # What each amplifier's macromodel includes and leaves out (printed by patchgen spice)
@@ -64,19 +67,20 @@ __all__ = ["CONTROL_NODE", "FORCE_NODE", "OPAMP_MODEL", "STATE_NODES", "SpiceDec
 class SpiceSettings:
     """What a scenario asks of the circuit run: duration, output step, initial plant state, switches.
 
-    ``x0`` is [s, theta, s_dot, theta_dot] in SI units. ``noise_and_drift`` gives the noise levels
-    and drift rate, as patchgen's simulator takes them (patchgen.bench.noise_drift; default none).
-    ``actuator`` "bench" uses the bench profile's actuator (lag, dead zone, force limit, limit
-    switches); "ideal" is F = K_U u_c. ``max_step_s`` bounds ngspice's time step (default: the
-    output step). ``disturbances`` are the scenario's pushes (on the cart or the pendulum tip) and
-    cart-position steps, as sources. ``noise_step_s`` is the step of the simulator the noisy run
-    is judged against: no noise source carries a band above its Nyquist frequency (0: each its
-    own band, patchgen.spice.noise.noise_source).
+    ``x0`` is the plant's state (the cart's [s, theta, s_dot, theta_dot]) in SI units.
+    ``noise_and_drift`` gives the noise levels and drift rate, as patchgen's simulator takes them
+    (patchgen.bench.noise_drift; default none). ``actuator`` "bench" uses the bench profile's
+    actuator (lag, dead zone, force limit, limit switches); "ideal" is F = K_U u_c. ``max_step_s``
+    bounds ngspice's time step (default: the output step). ``disturbances`` are the scenario's
+    pushes (on the cart, a rotary arm's end or the pendulum tip) and position steps, as sources.
+    ``noise_step_s`` is the step of the simulator the noisy run is judged against: no noise source
+    carries a band above its Nyquist frequency (0: each its own band,
+    patchgen.spice.noise.noise_source).
     """
 
     duration_s: float
     step_s: float
-    x0: tuple[float, float, float, float]
+    x0: tuple[float, ...]
     noise_and_drift: NoiseAndDrift = NoiseAndDrift()
     actuator: Literal["bench", "ideal"] = "bench"
     max_step_s: float | None = None
@@ -104,18 +108,20 @@ def _sensors(d: DeckLines, net: Netlist, bench: BenchProfile, machine: MachinePr
     d.comment(f"Sensors: volts = bench sensor constant x state, limited at +/-{machine.reference_V} V")
     levels = settings.noise_and_drift
     filters = bench.sensors.filters()
+    pm = PLANT_MODELS[bench.plant]
+    nodes = state_nodes(pm)
     if bench.sensors.quanta():  # a staircase stalls ngspice's time step at every count
         d.comment("Encoder counts left out: the deck reads the states continuously (the simulator has the counts)")
     for s, k in zip(net.sensors, sensor_constants(net, bench)):
-        if s.id not in STATE_NODES:
+        if s.id not in nodes:
             raise ValueError(f"sensor {s.id!r} is not a plant state")
         node = f"sens_{spice_name(s.id)}"
         rms = levels.sensor_V_rms.get(s.id, 0.0)
         clean = f"{node}_clean" if rms > 0 else node
-        state = f"v({STATE_NODES[s.id]})"
+        state = f"v({nodes[s.id]})"
         if s.id in filters:
-            state = _velocity_filter(d, s.id, filters[s.id], settings.x0)
-        if s.id == POSITION and any(x.kind == "step" for x in settings.disturbances):
+            state = _velocity_filter(d, pm, s.id, filters[s.id], settings.x0)
+        if s.id == pm.position and any(x.kind == "step" for x in settings.disturbances):
             state = f"({state}-v({S_REF_NODE}))"  # a step moves the reference the s sensor is read against
         volts = clamp(f"{num(k)}*{state}", machine.reference_V)
         d.add(f"B_sens_{spice_name(s.id)} {clean} 0 V = {volts}")
@@ -124,13 +130,13 @@ def _sensors(d: DeckLines, net: Netlist, bench: BenchProfile, machine: MachinePr
                           levels.sensor_bandwidth_Hz, settings.duration_s, settings.noise_step_s)
 
 
-def _velocity_filter(d: DeckLines, rate: str, f, x0) -> str:
+def _velocity_filter(d: DeckLines, pm: PlantModel, rate: str, f, x0) -> str:
     """A velocity as the bench reads it: the rate of its position's reading through
     wn^2 / (s^2 + 2 zeta wn s + wn^2), two states settled on the run's start. Returns the
     expression of the filtered rate."""
-    position = POSITION_OF[rate]
-    x = f"v({STATE_NODES[position]})"
-    start = dict(zip(PLANT_STATES, x0))
+    position = pm.position_of[rate]
+    x = f"v({state_nodes(pm)[position]})"
+    start = dict(zip(pm.state_names, x0))
     y, yd = f"vf_{spice_name(rate)}", f"vfd_{spice_name(rate)}"
     d.comment(f"{rate} from a filter of {position}'s reading: wn {f.wn_rad_s:g} rad/s, zeta {f.zeta:g}")
     state_integrator(d, y, f"v({yd})", start[position])
@@ -253,10 +259,10 @@ def _capacitor_ic(d: DeckLines, sj: str, out: str, amp: Amplifier, sj_V: float) 
     d.ics[sj] = float(sj_V)
 
 
-def output_vectors(net: Netlist) -> list[tuple[str, str]]:
+def output_vectors(net: Netlist, pm: PlantModel = CART) -> list[tuple[str, str]]:
     """(signal name, ngspice vector) written by ``wrdata``, in column order: the plant states, u_c,
-    the force and every amplifier's output (netlist order)."""
-    vecs = [(k, f"v({STATE_NODES[k]})") for k in PLANT_STATES]
+    the force (the plant's input) and every amplifier's output (netlist order)."""
+    vecs = [(k, f"v({node})") for k, node in state_nodes(pm).items()]
     vecs += [("u_c", f"v({CONTROL_NODE})"), ("force", f"v({FORCE_NODE})")]
     vecs += [(a.id, f"v({_amp_out(a.id)})") for a in net.amplifiers]
     return vecs
@@ -290,7 +296,7 @@ class SpiceDeck:
         return self.text
 
 
-def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: MachineProfile,
+def spice_deck(net: Netlist, plant: PlantParams | RotaryParams, bench: BenchProfile, machine: MachineProfile,
                settings: SpiceSettings) -> SpiceDeck:
     """The patched circuit and the bench as an ngspice deck.
 
@@ -302,8 +308,8 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     ----------
     net : Netlist
         The patch, as wired.
-    plant : PlantParams
-        The cart-pendulum.
+    plant : PlantParams or RotaryParams
+        The cart-pendulum or the rotary pendulum (the bench's plant).
     bench, machine : BenchProfile, MachineProfile
         The sensors, actuator and track; the machine's components and imperfections.
     settings : SpiceSettings
@@ -330,9 +336,13 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     d.comment(f"Control voltage u_c = output of {reading.output}")
     d.add(f"V_uc {CONTROL_NODE} {_source_node(reading, reading.output)} DC 0")
     actuator(d, plant, bench, settings.actuator == "ideal")
-    pushes = random_forces(d, disturbances(d, settings.disturbances), levels, settings.duration_s,
+    lever = 1.0 if isinstance(plant, PlantParams) else plant.L_r  # a push at a rotary arm's end: its torque
+    pushes = random_forces(d, disturbances(d, settings.disturbances, lever), levels, settings.duration_s,
                            settings.noise_step_s)
-    cart_pendulum(d, with_rotor(plant, motor_of(bench.actuator)), settings.x0, pushes)
+    if isinstance(plant, PlantParams):
+        cart_pendulum(d, with_rotor(plant, motor_of(bench.actuator)), settings.x0, pushes)
+    else:
+        rotary_pendulum(d, plant, settings.x0, pushes)
 
     max_step = settings.max_step_s or settings.step_s
     files, dt = play_noise(d, settings.seed, settings.duration_s)
@@ -340,7 +350,7 @@ def spice_deck(net: Netlist, plant: PlantParams, bench: BenchProfile, machine: M
     d.add(".ic " + " ".join(f"v({node})={num(v)}" for node, v in sorted(d.ics.items())))
     d.add(f".options method=gear reltol={num(settings.reltol)} abstol=1e-12 vntol=1e-9 "
           f"chgtol=1e-16 itl4=100")
-    vecs = " ".join(v for _, v in output_vectors(net))
+    vecs = " ".join(v for _, v in output_vectors(net, PLANT_MODELS[bench.plant]))
     output_step = None
     if d.noise:  # noise makes ngspice take some 7000 points per second of run: it keeps only the
         # vectors written and writes them at the output step (its solution, interpolated as it

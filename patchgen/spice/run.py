@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from patchgen.spice.deck import CONTROL_NODE, DATA_NAME, DECK_NAME, FORCE_NODE, INSTALL_HINT, STATE_NODES, SpiceDeck
+from patchgen.spice.deck import CONTROL_NODE, DATA_NAME, DECK_NAME, FORCE_NODE, INSTALL_HINT, SpiceDeck
+from patchgen.spice.plant import ALL_STATE_NODES
 
 
 class NgspiceMissing(RuntimeError):
@@ -115,7 +116,7 @@ def read_wrdata(path: str | Path, names: Sequence[tuple[str, str]] | None = None
     if table.shape[1] != len(header):
         raise NgspiceError(f"{path}: {table.shape[1]} columns for {len(header)} names")
     by_vec = {(v.lower()): k for k, v in names} if names else {}
-    state_of = {f"v({node})": k for k, node in STATE_NODES.items()}
+    state_of = {f"v({node})": k for k, node in ALL_STATE_NODES.items()}
     signals: dict[str, np.ndarray] = {}
     for i, col in enumerate(header[1:], start=1):
         key = col.lower()

@@ -40,7 +40,7 @@ def _reference(d, scenario: Scenario, t_eval: np.ndarray) -> np.ndarray:
     p, c = d.plant, d.controller
     meas = [d.model.states.index(m) for m in d.model.measured]
     x0 = np.array(scenario.initial.vector(d.spec.plant_model))
-    pushes = [(x.time_s, x.time_s + x.duration_s, x.at, x.force_N) for x in scenario.disturbances
+    pushes = [(x.time_s, x.time_s + x.duration_s, x.at, x.force_N, x.arm_m or p.L_p) for x in scenario.disturbances
               if x.kind == "force_impulse"]
     steps = [(x.time_s, x.step_size()) for x in scenario.disturbances if x.kind == "step"]
 
@@ -54,15 +54,14 @@ def _reference(d, scenario: Scenario, t_eval: np.ndarray) -> np.ndarray:
         y = y_of(t, x)
         u = (c.Cc @ xc + c.Dc @ y).item()
         f = nonlinear_rhs(x, u, p)
-        tip = sum(F for t0, t1, at, F in pushes if t0 <= t < t1 and at == "pendulum_tip")
-        arm = sum(F for t0, t1, at, F in pushes if t0 <= t < t1 and at == "arm")
-        if tip or arm:  # generalised forces M q'' = Q: tip (L_r, L_p cos theta), arm (L_r, 0)
+        on = [(at, F, r) for t0, t1, at, F, r in pushes if t0 <= t < t1]
+        if on:  # generalised forces M q'' = Q: a push r along the pendulum (L_r, r cos theta), on the arm (L_r, 0)
             s, co = math.sin(x[1]), math.cos(x[1])
             J_2 = p.pendulum_inertia() + p.m_p * p.pendulum_com() ** 2
             J_0 = p.arm_inertia() + p.m_r * p.arm_com() ** 2 + p.m_p * p.L_r ** 2
             K = p.m_p * p.L_r * p.pendulum_com()
             M = np.array([[J_0 + J_2 * s * s, K * co], [K * co, J_2]])
-            Q = np.array([(tip + arm) * p.L_r, tip * p.L_p * co])
+            Q = sum(np.array([F * p.L_r, F * r * co if at == "pendulum_tip" else 0.0]) for at, F, r in on)
             f[2:] += np.linalg.solve(M, Q)
         return np.concatenate([f, c.Ac @ xc + c.Bc @ y])
 
@@ -91,11 +90,14 @@ PUSHES = ('duration_s = 6.0\nnoise = "off"\ndrift = "off"\n'
           '[[disturbances]]\nkind = "force_impulse"\nat = "pendulum_tip"\ntime_s = 0.5\nduration_s = 0.1\n'
           'force_N = 0.02\n'
           '[[disturbances]]\nkind = "force_impulse"\nat = "arm"\ntime_s = 3.0\nduration_s = 0.1\nforce_N = 0.1\n')
+MIDWAY = ('duration_s = 6.0\nnoise = "off"\ndrift = "off"\n'
+          '[[disturbances]]\nkind = "force_impulse"\nat = "pendulum_tip"\ntime_s = 0.5\nduration_s = 0.1\n'
+          'force_N = 0.03\narm_m = 0.05\n')
 STEP = ('duration_s = 8.0\nnoise = "off"\ndrift = "off"\n'
         '[[disturbances]]\nkind = "step"\ntime_s = 0.5\nsize_deg = 10.0\n')
 
 
-@pytest.mark.parametrize("text", [RELEASE, PUSHES, STEP], ids=["release", "pushes", "arm-step"])
+@pytest.mark.parametrize("text", [RELEASE, PUSHES, MIDWAY, STEP], ids=["release", "pushes", "midway", "arm-step"])
 def test_the_kernel_is_the_equations_closed_by_the_design_s_law(qube, text):
     """Ideal bench (no noise, lag, limit or count): the patch's run equals the reference to 0.5 % of
     each signal's peak (the pots' 0.001 steps move the law by about 0.05 %)."""
@@ -151,3 +153,22 @@ def test_the_qube_s_patch_holds_in_its_own_scenarios_on_its_bench(qube):
     res = simulate(net, d.plant, reversed_encoder, inputs.machine, load_scenario("qube-release-5deg"), seed=7,
                    runs=10)
     assert not any(r.held for r in res.runs)
+
+
+@pytest.mark.parametrize("spec, scenario, field", [
+    ("qube-servo-2", "step-cart", "disturbances[0].size_m"),
+    ("qube-servo-2", "ip02-hold-60s", "disturbances[1].at"),
+    ("bench-recommended", "qube-arm-step", "disturbances[0].size_rad"),
+    ("bench-recommended", "qube-hold-60s", "disturbances[1].at"),
+])
+def test_another_plant_s_scenario_is_named_not_run(spec, scenario, field, tmp_path):
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    r = subprocess.run([sys.executable, "-m", "patchgen", "simulate", spec, "--scenario", scenario, "-o",
+                        str(tmp_path / "out")], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert f"{scenario}: {field}:" in r.stderr and "Traceback" not in r.stderr
+    assert not (tmp_path / "out").exists()

@@ -69,7 +69,7 @@ def test_bad_scenario_field_one_line(tmp_path):
 def test_spice_ideal_agrees_within_one_percent(tmp_path, name):
     # the ideal run does not clip: a scenario in which the patch stays inside the reference (a patch
     # of Quanser's own weights asks 33 V from 10 deg and leaves it; a tap on its bench does not)
-    scenario = {"quanser-ip02": "ip02-tap"}.get(name, "offset-10deg")
+    scenario = {"quanser-ip02": "ip02-tap", "qube-servo-2": "qube-tap"}.get(name, "offset-10deg")
     r = run("spice", name, "--scenario", scenario, "--ideal", "-o",
             str(tmp_path), "--json", "--svg")
     if r.returncode == 2:  # a design that does not fit the machine: the one-line resource error

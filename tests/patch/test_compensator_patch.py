@@ -10,9 +10,11 @@ import pytest
 from patchgen.design import compensator as comp
 from patchgen.design.lti import compensator_ss, load_design
 from patchgen.inputs.errors import InputError
+from patchgen.inputs.scenario import fits
 from patchgen.patch.build import build_patch
 from patchgen.patch.compensator_fit import laws, whole_law
 from patchgen.patch.readback import wired_law
+from patchgen.plant.plant_model import CART
 from patchgen.profiles.machine import load_machine
 
 W = np.logspace(-1, 2, 61)  # rad/s, the band the wiring must match
@@ -146,5 +148,7 @@ def test_bench_lqg_stages_its_fast_mode_and_holds_on_the_bench():
     bench = load_bench(d.spec.bench)
     for name in shipped("scenario"):
         sc = load_scenario(shipped_file("scenario", name))
+        if not fits(sc, CART):  # a rotary pendulum's (an arm's step or push)
+            continue
         r = simulate(net, plant_params(d.spec), bench, m, sc, runs=40, keep_history=False)
         assert r.distribution.fraction_held == 1.0, name

@@ -317,3 +317,22 @@ def test_a_torque_and_a_tip_force_do_the_work_they_should(plant, th, ad, thd, V_
     torques = (abs(tau) + abs(torque) + abs(tip) * (plant.L_r + plant.L_p) + plant.D_r * abs(ad)
                + plant.D_p * abs(thd) + plant.m_p * plant.g * l_p + inertia * (ad ** 2 + thd ** 2))
     assert dT + dV == pytest.approx(want, abs=1e-9 * (abs(ad) + abs(thd)) * torques)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_spice_form_is_the_lanes_form(seed):
+    """The deck's expressions (patchgen.plant.rotary_behavioural, evaluated as Python) equal the
+    kernel's form, a torque and a tip force among the inputs, to rounding."""
+    from patchgen.plant.rotary_behavioural import rotary_accelerations
+
+    rng = np.random.default_rng(seed)
+    for plant in [QUBE_SERVO_2] + [_random_plant(rng) for _ in range(12)]:
+        add_expr, thdd_expr = rotary_accelerations(plant, repr, "th", "ad", "thd", "V", "T", "F")
+        for _ in range(6):
+            x = np.array([0.0, rng.uniform(-7, 7), rng.uniform(-30, 30), rng.uniform(-30, 30)])
+            V_m, torque, tip = rng.uniform(-12, 12), rng.uniform(-0.05, 0.05), rng.uniform(-1, 1)
+            names = {"sin": math.sin, "cos": math.cos, "th": x[1], "ad": x[2], "thd": x[3], "V": V_m, "T": torque,
+                     "F": tip}
+            got = [eval(e, {"__builtins__": {}}, names) for e in (add_expr, thdd_expr)]  # noqa: S307 - the plant's own
+            want = _lanes_accel(plant, x, V_m, torque, tip)[2:]
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.abs(want).max())

@@ -252,24 +252,18 @@ class Scenario(InputModel):
         """The scenario's pushes as the simulator applies them to ``plant``: a push on the pendulum
         at ``arm_m`` becomes a push on the cart and one at l (patchgen.plant.equations.push_shares),
         as the nominal pendulum has them; one at l stays as it is."""
-        if all(x.arm_m is None for x in self.disturbances):
-            return self
-        out = []
-        for x in self.disturbances:
-            if x.arm_m is None:
-                out.append(x)
-                continue
-            cart, at_l = push_shares(plant, x.arm_m)
-            out.append(x.model_copy(update={"force_N": x.force_N * at_l, "arm_m": None}))
-            if cart:
-                out.append(x.model_copy(update={"force_N": x.force_N * cart, "arm_m": None, "at": "cart"}))
-        return self.model_copy(update={"disturbances": out})
+        return self._pushes_shared(lambda arm_m: push_shares(plant, arm_m)[::-1], "cart")
 
     def on_arm(self, plant) -> Scenario:
         """The scenario's pushes as the simulator applies them to a rotary pendulum (a RotaryParams):
         a push on the pendulum at ``arm_m`` from its pivot does its work as arm_m / L_p of it at the
         tip and the rest at the arm's end (the same generalised forces: F L_r on the arm, F arm_m
         cos(theta) on the pendulum); one at the tip, or at the arm's end, stays as it is."""
+        return self._pushes_shared(lambda arm_m: (arm_m / plant.L_p, 1.0 - arm_m / plant.L_p), "arm")
+
+    def _pushes_shared(self, shares, body: str) -> Scenario:
+        """Each push at a stated point of the pendulum split as ``shares(arm_m)`` says: (the share
+        where the simulator's tip force acts, the share on ``body``)."""
         if all(x.arm_m is None for x in self.disturbances):
             return self
         out = []
@@ -277,10 +271,10 @@ class Scenario(InputModel):
             if x.arm_m is None:
                 out.append(x)
                 continue
-            share = x.arm_m / plant.L_p
-            out.append(x.model_copy(update={"force_N": x.force_N * share, "arm_m": None}))
-            if share != 1.0:
-                out.append(x.model_copy(update={"force_N": x.force_N * (1.0 - share), "arm_m": None, "at": "arm"}))
+            tip, rest = shares(x.arm_m)
+            out.append(x.model_copy(update={"force_N": x.force_N * tip, "arm_m": None}))
+            if rest:
+                out.append(x.model_copy(update={"force_N": x.force_N * rest, "arm_m": None, "at": body}))
         return self.model_copy(update={"disturbances": out})
 
     @property

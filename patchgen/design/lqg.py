@@ -237,8 +237,9 @@ def _estimator(spec: DesignSpec, bench: BenchProfile | None, model: LinearModel,
         return est, ctl, loop_margins(*loop_with_controller(model, ctl))
     if e.kind in ("filtered_differentiator", "reduced_observer"):
         if e.kind == "reduced_observer" and len(spec.sensors.derived()) > 1:
-            raise spec.error("estimator.kind", "the reduced observer is built for a measured s_dot: without one, a "
-                                               "differentiator or a Kalman filter finds it")
+            rate = spec.plant_model.rate_of[spec.plant_model.position]
+            raise spec.error("estimator.kind", f"the reduced observer is built for a measured {rate}: without one, "
+                                               "a differentiator or a Kalman filter finds it")
         if bench is None:
             raise ValueError(f"{spec.name}: a {e.kind} estimator is shaped for the bench's noise; pass the bench "
                              f"profile the spec names ({spec.bench!r}, patchgen.profiles.bench.load_bench)")

@@ -458,7 +458,8 @@ def check_spec(spec: DesignSpec) -> None:
             raise err("sensors.measured", f"must include {p}: a position is read on its sensor (the patch finds "
                                           "a rate from its position, not the other way round)")
     if len(spec.sensors.derived()) > 1 and spec.estimator.kind == "reduced_observer":
-        raise err("estimator.kind", "the reduced observer is built for a measured s_dot: with s_dot left out of "
+        rate = plant.rate_of[plant.position]
+        raise err("estimator.kind", f"the reduced observer is built for a measured {rate}: with {rate} left out of "
                                     "sensors.measured, choose \"differentiator\", \"filtered_differentiator\" or "
                                     "\"kalman\"")
     if spec.estimator.kind == "kalman":

@@ -67,6 +67,7 @@ SENSOR_LABELS = dict(zip(MEASURED, ("cart position pot", "pendulum angle pot", "
 # the patch is set, what is moved by hand, how each hand-moved state is moved, and its signs
 AT_REST = "the cart held at the centre of the track"
 LIMIT_EVENT = "limit switch"  # what ends a run at the position's limit, as a table heads it
+KEPT_INSIDE = "the cart inside the limit switches"  # what a held run kept, beside the pendulum up
 BY_HAND = "the cart or the pendulum"
 HAND_WORDS = {POSITION: "move the cart toward +s", ANGLE: "lean the pendulum toward +s"}
 SIGN_WORDS = "+s is the way a positive u_c drives the cart; θ is positive when the pendulum leans toward +s."

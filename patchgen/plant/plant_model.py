@@ -53,8 +53,9 @@ class PlantModel:
         What reads each measured quantity on the plant's reference bench, as a sheet names it.
     at_rest, by_hand : str
         How a sheet says the plant is held while a patch is set, and what a person moves by hand.
-    limit_event : str
-        What ends a run at the position's limit, as a table heads it ("limit switch").
+    limit_event, kept_inside : str
+        What ends a run at the position's limit, as a table heads it ("limit switch"), and what a
+        held run kept besides the pendulum up ("the cart inside the limit switches").
     hand_words : mapping of str to str
         How each hand-moved state is moved, in a sign check's row.
     sign_words : str
@@ -89,6 +90,7 @@ class PlantModel:
     at_rest: str
     by_hand: str
     limit_event: str
+    kept_inside: str
     hand_words: Mapping[str, str]
     sign_words: str
     parameters: tuple[Parameter, ...]
@@ -150,7 +152,8 @@ def _described(module, params_type: type, linear) -> PlantModel:
         name=m.NAME, what=m.WHAT, states=m.STATES, input=m.INPUT, input_unit=m.INPUT_UNIT, input_noun=m.INPUT_NOUN,
         input_what=m.INPUT_WHAT, position=m.POSITION, angle=m.ANGLE, body=m.BODY, rate_of=m.RATE_OF,
         measurable=m.MEASURABLE, measured=m.MEASURED, sensor_labels=m.SENSOR_LABELS, at_rest=m.AT_REST,
-        limit_event=m.LIMIT_EVENT, by_hand=m.BY_HAND, hand_words=m.HAND_WORDS, sign_words=m.SIGN_WORDS,
+        limit_event=m.LIMIT_EVENT, kept_inside=m.KEPT_INSIDE, by_hand=m.BY_HAND, hand_words=m.HAND_WORDS,
+        sign_words=m.SIGN_WORDS,
         parameters=m.PARAMETERS, params_type=params_type, linear=linear, step=m.STEP, optional=m.OPTIONAL)
 
 

@@ -45,6 +45,7 @@ SENSOR_LABELS = dict(zip(MEASURED, ("arm encoder", "pendulum encoder")))
 # How a patch sheet speaks of the plant (as patchgen.plant.cart_pendulum's)
 AT_REST = "the arm held at its centre, the pendulum hanging"
 LIMIT_EVENT = "cable wound up"  # what ends a run at the position's limit, as a table heads it
+KEPT_INSIDE = "the arm short of its cable's wind-up"  # what a held run kept, beside the pendulum up
 BY_HAND = "the arm or the pendulum"
 HAND_WORDS = {POSITION: "turn the arm toward +α", ANGLE: "lean the pendulum toward +α"}
 SIGN_WORDS = ("+α is the way a positive u_c turns the arm; θ is positive when the pendulum leans the way +α moves "

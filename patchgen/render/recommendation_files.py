@@ -125,7 +125,7 @@ def method_text(rec: Recommendation) -> str:
     names = ", ".join(f"{sc.name} (seed {rec.seed_of(sc)})" for sc in rec.scenarios)
     return (f"Each realisation that fits the machine was designed, allocated and run on the bench (actuator lag, dead "
             f"zone and limit, sensor noise, random forces on the plant, integrator drift) in every scenario: {names}. "
-            f"'held' counts runs where the pendulum stayed up, the cart inside the limit switches and every amplifier "
+            f"'held' counts runs where the pendulum stayed up, {rec.spec.plant_model.kept_inside} and every amplifier "
             f"inside the rails for the whole scenario; the table gives the weakest scenario, with its 95 % Wilson "
             f"interval. Runs went in rounds of {ROUND_RUNS} per scenario, up to {rec.max_runs}: a realisation stopped "
             f"once every scenario's interval was above {TARGET:.0%} (holds) or one was below it (fails). A wired loop "

@@ -8,13 +8,17 @@ from dataclasses import asdict, dataclass
 
 from patchgen.bench.diagnosis import as_patched_on_bench
 from patchgen.design.lqg import Design, design_on
+from patchgen.inputs.errors import InputError
 from patchgen.patch.as_patched import AsPatched
 from patchgen.patch.netlist import Netlist
 from patchgen.pipeline.inputs import Inputs
 from patchgen.pipeline.prediction import BenchPrediction, predict_on_bench
 from patchgen.pipeline.scaling import scaled_patch
 from patchgen.plant.equations import PlantParams
+from patchgen.plant.plant_model import CART
+from patchgen.plant.rotary_equations import RotaryParams
 from patchgen.swingup.manoeuvre import BENCH_HOLD_S, Manoeuvre, manoeuvre
+from patchgen.swingup.rotary_manoeuvre import RotaryManoeuvre, rotary_manoeuvre
 from patchgen.swingup.run import StrategySummary, compare_strategies
 
 SHEET_HOLD_RUNS = 10  # seeds of the sheet's 120 s hold: fewer than patchgen patch's, as the manoeuvre runs too
@@ -85,7 +89,49 @@ def _plain(row) -> dict:
     return {k: v.item() if hasattr(v, "item") else v for k, v in asdict(row).items()}
 
 
-def run_swingup(inputs: Inputs, plan: SwingupPlan, comparing=None) -> SwingupReport:
+@dataclass(frozen=True)
+class RotarySwingupReport:
+    """A rotary pendulum's manoeuvre: the design and its patch, the energy pump-up, the hand-off and
+    the patched hold on the bench, the patch judged and predicted as patchgen patch does."""
+
+    design: Design
+    netlist: Netlist
+    plant: RotaryParams
+    plan: SwingupPlan
+    manoeuvre: RotaryManoeuvre
+    judged: AsPatched
+    prediction: BenchPrediction
+
+    def summary(self) -> dict:
+        """Every figure and verdict, as plain JSON-able data (manoeuvre.json, --json)."""
+        return {"design": self.design.spec.name, **self.manoeuvre.summary()}
+
+
+def run_rotary_swingup(inputs: Inputs, plan: SwingupPlan) -> RotarySwingupReport:
+    """A rotary pendulum pumped up by energy control, handed to its patch, held on the bench.
+
+    Raises
+    ------
+    InputError
+        A cart's option: another strategy than energy, a force limit, the strategies compared.
+    """
+    spec, machine, bench = inputs
+    for given, option, why in ((plan.strategy != "energy", "--strategy", "the rotary pendulum is pumped by "
+                                "energy control (Astrom and Furuta): --strategy energy"),
+                               (plan.force_limit_N is not None, "--force-limit", "a cart's force: the rotary "
+                                "pump drives the motor to the bench amplifier's V_limit"),
+                               (plan.compare, "--compare", "compares the cart's three strategies")):
+        if given:
+            raise InputError(option, "", why)
+    d = design_on(spec, machine, bench)
+    net = scaled_patch(d, machine, bench).netlist
+    m = rotary_manoeuvre(net, d.plant, bench, machine, plan.hold_s, plan.seed)
+    judged = as_patched_on_bench(d, net, machine, bench)
+    pred = predict_on_bench(d, net, machine, bench, plan.sheet_runs_hold)
+    return RotarySwingupReport(d, net, d.plant, plan, m, judged, pred)
+
+
+def run_swingup(inputs: Inputs, plan: SwingupPlan, comparing=None) -> SwingupReport | RotarySwingupReport:
     """Design and patch the spec, pump its pendulum up, hand off and hold on the bench.
 
     Parameters
@@ -103,6 +149,8 @@ def run_swingup(inputs: Inputs, plan: SwingupPlan, comparing=None) -> SwingupRep
         The manoeuvre and, when asked, the strategies compared.
     """
     spec, machine, bench = inputs
+    if spec.plant_model is not CART:
+        return run_rotary_swingup(inputs, plan)
     d = design_on(spec, machine, bench)
     net = scaled_patch(d, machine, bench).netlist
     plant = d.plant

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from rich.console import Console
 
-from patchgen.pipeline.swingup import SwingupReport
+from patchgen.pipeline.swingup import RotarySwingupReport, SwingupReport
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.render import plot_helper
@@ -14,8 +14,10 @@ from patchgen.render.bench_sheet import predicted_patch_files
 from patchgen.render.manoeuvre_plot import plot_manoeuvre
 from patchgen.render.outputs import json_text
 from patchgen.render.sheet import SheetSection
+from patchgen.render.simulation_files import output_files as output_files_of_hold
 from patchgen.render.swingup_files import compact_schedule_rows, output_files, patch_sheet_rows
 from patchgen.render.terminal import add_row, number, show, table, text
+from patchgen.swingup.rotary_energy import SWITCHING
 
 
 def swingup_files(report: SwingupReport, machine: MachineProfile, bench: BenchProfile,
@@ -94,3 +96,44 @@ def print_swingup(report: SwingupReport, written: list, console: Console | None 
 
 def _num(x, fmt: str) -> str:
     return "-" if x is None else fmt.format(x)
+
+
+ROTARY_HOLD_PREFIX = "hold-"  # the patched hold's simulation files, beside the patch's
+
+
+def rotary_swingup_files(report: RotarySwingupReport, machine: MachineProfile, bench: BenchProfile,
+                         svg: bool) -> dict[str, bytes | str]:
+    """A rotary pendulum's manoeuvre files: the patch and its sheet with the switching table and the
+    bench prediction, the patched hold's simulation files (hold-history.csv, ...), manoeuvre.json."""
+    m = report.manoeuvre
+    rows = [["When", "Law"]] + [[r.condition, r.law] for r in SWITCHING]
+    section = SheetSection(f"Swing-up switching table (energy, {m.v_limit:g} V)", rows[0], rows[1:],
+                           "From hanging at rest: the pump drives the motor until the pendulum is within the catch "
+                           "zone, then the patch takes over (IC -> OP)" + (
+                               f", here at {m.pump.handoff_time:.2f} s." if m.reached else
+                               f"; in this design's plant model the pump came no nearer than {m.closest_deg:.0f} deg "
+                               "to upright."))
+    files = predicted_patch_files(report.design, machine, bench, report.netlist, report.prediction, report.judged,
+                                  [section])
+    if m.hold is not None:
+        files.update({ROTARY_HOLD_PREFIX + k: v for k, v in output_files_of_hold(m.hold, svg).items()})
+    files["manoeuvre.json"] = json_text(report.summary())
+    return files
+
+
+def print_rotary_swingup(report: RotarySwingupReport, written: list, console: Console | None = None) -> None:
+    """The rotary manoeuvre in a few lines: reached, hand-off, hold."""
+    console = console or Console()
+    m = report.manoeuvre
+    if not m.reached:
+        console.print(f"[red]not reached[/red]: the energy pump at +/-{m.v_limit:g} V came no nearer than "
+                      f"{m.closest_deg:.1f} deg to upright in {m.pump.t[-1]:.0f} s (the design's plant: its pendulum "
+                      "damping D_p takes the energy the pump puts in)")
+    else:
+        console.print(f"pumped up by energy control at +/-{m.v_limit:g} V: hand-off to the patch at "
+                      f"{m.pump.handoff_time:.2f} s, |alpha| at most {m.pump.max_abs_alpha:.2f} rad")
+        run = m.hold.runs[0]
+        console.print(("[green]held[/green]" if m.held else "[red]not held[/red]")
+                      + f" by the patch on the bench for {m.hold_s:g} s: max |theta| {run.max_abs_theta_deg:.1f} deg, "
+                      f"max |alpha| {run.max_abs_s_m:.2f} rad, max |u_c| {run.max_abs_u_c_V:.2f} V")
+    console.print("wrote " + ", ".join(str(p) for p in written))

@@ -155,7 +155,8 @@ def hanging(nudge: float = NUDGE_RAD, nudge_rate: float = 0.0) -> np.ndarray:
 
 def simulate_swingup(p: RotaryParams, v_limit: float, x0: np.ndarray | None = None, t_end: float = 40.0,
                      K: np.ndarray | None = None, gains: EnergyGains = EnergyGains(), handoff: bool = True,
-                     hold_check: float = HOLD_CHECK_S, sample: float = SAMPLE_S) -> SwingUpRun:
+                     hold_check: float = HOLD_CHECK_S, sample: float = SAMPLE_S,
+                     stop_at_handoff: bool = False) -> SwingUpRun:
     """Run the switched controller on the nonlinear plant: solve_ivp across each sample period
     with the voltage held (zero-order hold), the controller evaluated at each sample.
 
@@ -179,6 +180,9 @@ def simulate_swingup(p: RotaryParams, v_limit: float, x0: np.ndarray | None = No
         The closing window (s) over which ``held`` is judged.
     sample : float
         Controller sample period (s).
+    stop_at_handoff : bool
+        End the run at the first sample the catch takes over (the state another controller, the
+        patched circuit, is handed).
 
     Returns
     -------
@@ -193,13 +197,18 @@ def simulate_swingup(p: RotaryParams, v_limit: float, x0: np.ndarray | None = No
     xs[0] = hanging() if x0 is None else x0
     for i in range(n):
         Vs[i], lq[i] = law(xs[i])
+        if stop_at_handoff and lq[i]:
+            t, xs, Vs, lq, n = t[:i + 1], xs[:i + 1], Vs[:i + 1], lq[:i + 1], i
+            break
         sol = solve_ivp(lambda _t, y, v=Vs[i]: nonlinear_rhs(y, v, p), (t[i], t[i + 1]), xs[i],
                         rtol=RTOL, atol=ATOL, max_step=MAX_STEP_S)
         xs[i + 1] = sol.y[:, -1]
-    Vs[n], lq[n] = law(xs[n])
+    else:
+        Vs[n], lq[n] = law(xs[n])
     on = np.flatnonzero(lq)
     tail = t >= t_end - hold_check
+    stopped = t[-1] < t_end - 0.5 * sample  # ended at the hand-off: this run held nothing
     return SwingUpRun(t=t, x=xs, V=Vs, lqr=lq, energy=pendulum_energy(p, xs[:, 1], xs[:, 3]),
                       handoff_time=float(t[on[0]]) if on.size else None,
-                      held=bool(np.all(np.abs(wrap(xs[tail, 1])) < HOLD_ANGLE_RAD)),
+                      held=not stopped and bool(np.all(np.abs(wrap(xs[tail, 1])) < HOLD_ANGLE_RAD)),
                       max_abs_alpha=float(np.max(np.abs(xs[:, 0]))), max_abs_V=float(np.max(np.abs(Vs))))

@@ -82,15 +82,18 @@ class FiniteFloat(click.ParamType):
         return x
 
 
-def parse_vary(text: str, option: str = "--vary") -> list[str]:
-    """Comma-separated plant parameters (of patchgen.studies.sweep.VARIABLE); an InputError naming
-    ``option`` otherwise."""
-    from patchgen.studies.sweep import VARIABLE  # the sweep's own (and its process pool): for sweep alone
+def parse_vary(text: str | None, option: str = "--vary", plant=None) -> list[str]:
+    """Comma-separated parameters of ``plant`` a sweep may vary (patchgen.studies.sweep.variable;
+    the cart's by default), or, when ``text`` is None, those a bench may have wrong (gravity not
+    among them); an InputError naming ``option`` otherwise."""
+    from patchgen.studies.sweep import VARIABLE, variable  # the sweep's own (and its process pool): for sweep alone
 
-    names = [t.strip() for t in text.split(",") if t.strip()]
+    allowed = VARIABLE if plant is None else variable(plant)
+    uncertain = tuple(n for n in allowed if n != "g")
+    names = list(uncertain) if text is None else [t.strip() for t in text.split(",") if t.strip()]
     for n in names:
-        if n not in VARIABLE:
-            raise InputError(option, "", f"unknown parameter {n!r} (choose from {', '.join(VARIABLE)})")
+        if n not in allowed:
+            raise InputError(option, "", f"unknown parameter {n!r} (choose from {', '.join(allowed)})")
     if not names:
         raise InputError(option, "", "name at least one parameter")
     return names

@@ -16,8 +16,8 @@ from .options import MACHINE, json_option, parse_by, parse_vary
 
 @cli.command("sweep")
 @click.argument("spec")
-@click.option("--vary", default=",".join(UNCERTAIN), show_default=True,
-              help="Parameters to vary, comma-separated.")
+@click.option("--vary", default=None, help="Parameters to vary, comma-separated (default: the plant's that a "
+              "bench may have wrong: " + ",".join(UNCERTAIN) + " for a cart).")
 @click.option("--by", "by_text", default="10%", show_default=True, help="Relative change, e.g. 10%.")
 @click.option("--workers", default=0, type=click.IntRange(0, 64), help="Processes (0: one per core).")
 @click.option("--scenario", "scenario_path", default="offset-10deg", show_default=True,
@@ -30,8 +30,9 @@ def sweep_cmd(spec: str, vary: str, by_text: str, workers: int, scenario_path: s
               machine: str | None, as_json: bool) -> None:
     """Re-design SPEC with each plant parameter off by --by (thesis tables 4.1, 4.2): the gains, the
     margins, the pots that would change, and how the nominal patch (as wired) does on that plant."""
-    plan = SweepPlan(tuple(parse_vary(vary)), parse_by(by_text), workers, runs)
+    by = parse_by(by_text)
     inputs = load_inputs(spec, machine=machine, command="sweep")
+    plan = SweepPlan(tuple(parse_vary(vary, plant=inputs.spec.plant_model)), by, workers, runs)
     scenario = scenario_for(scenario_path, inputs.spec, runs)  # a bad scenario fails here, in one line
     report = run_sweep(inputs, scenario, plan)
     if as_json:

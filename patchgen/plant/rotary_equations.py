@@ -123,14 +123,16 @@ class RotaryParams:
         **factors : float
             Parameter name -> factor, e.g. ``m_p=1.1`` for a pendulum 10 % heavier. A rod's
             centre of mass or inertia left as None follows its mass and length; one given is
-            not scaled unless named.
+            not scaled unless named; one named that was left as None is the rod's, scaled.
 
         Returns
         -------
         RotaryParams
             The perturbed plant; this one is unchanged.
         """
-        return replace(self, **{k: getattr(self, k) * f for k, f in factors.items()})
+        rod = {"l_r": self.arm_com, "J_r": self.arm_inertia, "l_p": self.pendulum_com, "J_p": self.pendulum_inertia}
+        return replace(self, **{k: (getattr(self, k) if getattr(self, k) is not None else rod[k]()) * f
+                                for k, f in factors.items()})
 
 
 @dataclass(frozen=True)

@@ -15,11 +15,17 @@ from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
 from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.build import build_patch
-from patchgen.plant.cart_pendulum import UNCERTAIN
+from patchgen.plant.plant_model import CART, PlantModel
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
-VARIABLE = UNCERTAIN + ("g",)  # the plant parameters a sweep may vary (PlantParams.scaled): gravity too
+
+def variable(plant: PlantModel) -> tuple[str, ...]:
+    """The plant parameters a sweep may vary (its ``scaled``): those a bench may have wrong, and gravity."""
+    return plant.uncertain + ("g",)
+
+
+VARIABLE = variable(CART)  # the cart's
 PARALLEL_FROM = 4  # rows from which a process pool pays for its start-up
 
 
@@ -104,7 +110,7 @@ def sweep(spec: DesignSpec, machine: MachineProfile, names: list[str], by: float
     machine : MachineProfile
         The machine the patches are allocated on (and its differentiator roll-off).
     names : list of str
-        Plant parameters to vary (VARIABLE).
+        Plant parameters to vary (``variable(spec.plant_model)``).
     by : float
         Relative change, 0 < by < 1.
     workers : int

@@ -79,3 +79,8 @@ def design_from_path(path, machine=None):
 
     inputs = load_inputs(str(path)) if machine is None else load_inputs(str(path), machine=machine)
     return run_design(inputs).design, inputs.machine
+
+
+def run_patchgen(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess:
+    """``python -m patchgen ARGS`` as a user runs it: its exit status and both streams, as text."""
+    return subprocess.run([sys.executable, "-m", "patchgen", *args], capture_output=True, text=True, cwd=cwd)

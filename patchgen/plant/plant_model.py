@@ -164,11 +164,6 @@ PLANT_MODELS = {m.name: m for m in (CART, ROTARY)}
 DEFAULT = CART.name  # a spec that names no plant model: every spec written before the rotary pendulum
 
 
-def plant_model(name: str) -> PlantModel:
-    """The plant model a spec names (KeyError for a name not in PLANT_MODELS)."""
-    return PLANT_MODELS[name]
-
-
 def model_of(params: Any) -> PlantModel:
     """The plant model whose parameter type ``params`` is (a PlantParams is the cart's): so that a
     stage handed a plant's figures asks them which plant they are."""

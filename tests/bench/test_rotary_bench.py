@@ -162,13 +162,9 @@ def test_the_qube_s_patch_holds_in_its_own_scenarios_on_its_bench(qube):
     ("bench-recommended", "qube-hold-60s", "disturbances[1].at"),
 ])
 def test_another_plant_s_scenario_is_named_not_run(spec, scenario, field, tmp_path):
-    import subprocess
-    import sys
+    from tests.conftest import run_patchgen
 
-    from tests.conftest import ROOT
-
-    r = subprocess.run([sys.executable, "-m", "patchgen", "simulate", spec, "--scenario", scenario, "-o",
-                        str(tmp_path / "out")], capture_output=True, text=True, cwd=ROOT)
+    r = run_patchgen("simulate", spec, "--scenario", scenario, "-o", str(tmp_path / "out"))
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert f"{scenario}: {field}:" in r.stderr and "Traceback" not in r.stderr
     assert not (tmp_path / "out").exists()

@@ -6,8 +6,6 @@ spec's and bench's refusals of what the rotary pendulum does not take."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import control as ct
 import numpy as np
@@ -23,7 +21,7 @@ from patchgen.pipeline.inputs import load_inputs
 from patchgen.plant.plant_model import PLANT_MODELS, ROTARY
 from patchgen.plant.qube_servo2 import QUBE_SERVO_2
 from patchgen.profiles.bench import load_bench
-from tests.conftest import ROOT
+from tests.conftest import ROOT, run_patchgen
 from tests.plant.test_rotary import FLIP, LR, MR, quanser_linear_model
 
 QUBE = "qube-servo-2"
@@ -184,23 +182,20 @@ def test_a_rotary_bench_refuses_a_cart_s_fields(tmp_path, old, new, field):
     assert err.value.field == field
 
 
-def _run(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "patchgen", *args], capture_output=True, text=True, cwd=ROOT)
-
 
 def test_the_cli_designs_and_patches_the_qube_and_refuses_what_takes_the_cart_alone(tmp_path):
-    r = _run("design", QUBE, "--json")
+    r = run_patchgen("design", QUBE, "--json")
     assert r.returncode == 0, r.stderr
     got = json.loads(r.stdout)
     assert got["states"] == ["alpha", "theta", "alpha_dot", "theta_dot"]
     assert got["control_law"] == "u = -K x (u: voltage on the arm's motor, V)"
     np.testing.assert_allclose(got["K"], patchgen.load_design(QUBE).K[0], rtol=1e-12)
     assert set(got["zeros"]) == {"alpha/V_m", "alpha_dot/V_m"}
-    r = _run("patch", QUBE, "-o", str(tmp_path / "patch"))
+    r = run_patchgen("patch", QUBE, "-o", str(tmp_path / "patch"))
     assert r.returncode == 0, r.stderr
     assert "the arm held at its centre" in (tmp_path / "patch" / "patch-sheet.md").read_text()
     for command in (["bench-test", QUBE, "-o", str(tmp_path / "rec")],):
-        r = _run(*command)
+        r = run_patchgen(*command)
         assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
         assert "plant.model" in r.stderr and "rotary-pendulum" in r.stderr and "Traceback" not in r.stderr
         assert "taken by design, patch, simulate, check, export, spice, recommend, swingup, sweep" in r.stderr

@@ -5,8 +5,6 @@ recommend writes it) holding again on seeds the ranking never drew."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
 
@@ -16,7 +14,7 @@ from patchgen.patch.netlist import read_netlist
 from patchgen.pipeline.inputs import load_inputs, scenario_for
 from patchgen.pipeline.recommend import RecommendPlan, run_recommend
 from patchgen.profiles.bench import bench_scenarios
-from tests.conftest import ROOT
+from tests.conftest import run_patchgen
 
 pytestmark = pytest.mark.heavy(40)  # seconds, roughly: see tests/conftest.py
 QUBE = "qube-servo-2"
@@ -46,8 +44,7 @@ def test_the_chosen_patch_holds_in_every_scenario_of_the_qube_s_bench(recommende
 def test_the_written_patch_holds_on_fresh_seeds(tmp_path):
     """patchgen recommend's own netlist, simulated again on seeds 9000 on (the ranking drew each
     scenario's own seed), 100 runs each: held in at least 95 of each."""
-    r = subprocess.run([sys.executable, "-m", "patchgen", "recommend", QUBE, "-o", str(tmp_path / "rec"), "--json"],
-                       capture_output=True, text=True, cwd=ROOT)
+    r = run_patchgen("recommend", QUBE, "-o", str(tmp_path / "rec"), "--json")
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout)["chosen"] is not None
     net = read_netlist(tmp_path / "rec" / "netlist.json")

@@ -5,8 +5,6 @@ rod's figure left out perturbed as the rod's, and a cart's parameter refused."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import control as ct
 import numpy as np
@@ -15,15 +13,11 @@ import pytest
 from patchgen.plant.qube_servo2 import QUBE_SERVO_2
 from patchgen.plant.rotary_equations import linear_matrices
 from patchgen.plant.rotary_pendulum import UNCERTAIN
-from tests.conftest import ROOT
-
-
-def _run(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "patchgen", *args], capture_output=True, text=True, cwd=ROOT)
+from tests.conftest import run_patchgen
 
 
 def test_every_row_is_the_lqr_of_its_perturbed_plant():
-    r = _run("sweep", "qube-servo-2", "--vary", "m_p,J_p,k_t", "--json")
+    r = run_patchgen("sweep", "qube-servo-2", "--vary", "m_p,J_p,k_t", "--json")
     assert r.returncode == 0, r.stderr
     rows = {row["case"]: row for row in json.loads(r.stdout)}
     assert set(rows) == {"nominal", "m_p +10%", "m_p -10%", "J_p +10%", "J_p -10%", "k_t +10%", "k_t -10%",
@@ -44,10 +38,10 @@ def test_a_rod_s_figure_left_out_is_perturbed_as_the_rod_s():
 
 
 def test_the_default_rows_are_the_plant_s_uncertain_parameters_and_a_cart_s_is_refused():
-    r = _run("sweep", "qube-servo-2", "--json")
+    r = run_patchgen("sweep", "qube-servo-2", "--json")
     assert r.returncode == 0, r.stderr
     cases = [row["case"] for row in json.loads(r.stdout)]
     assert cases == ["nominal"] + [f"{n} {s}10%" for n in UNCERTAIN for s in "+-"] + ["all +10%"]
-    bad = _run("sweep", "qube-servo-2", "--vary", "M")
+    bad = run_patchgen("sweep", "qube-servo-2", "--vary", "M")
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "--vary" in bad.stderr
     assert "unknown parameter 'M'" in bad.stderr and "m_r" in bad.stderr

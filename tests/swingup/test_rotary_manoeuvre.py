@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -19,7 +17,7 @@ from patchgen.pipeline.inputs import load_inputs
 from patchgen.pipeline.scaling import scaled_patch
 from patchgen.swingup.rotary_energy import CATCH_ANGLE_RAD, wrap
 from patchgen.swingup.rotary_manoeuvre import handoff_scenario, rotary_manoeuvre
-from tests.conftest import ROOT
+from tests.conftest import ROOT, run_patchgen
 
 pytestmark = pytest.mark.heavy(30)  # seconds, roughly: see tests/conftest.py
 SPEC = (ROOT / "designs" / "qube-servo-2.toml").read_text()
@@ -27,9 +25,6 @@ SPEC = (ROOT / "designs" / "qube-servo-2.toml").read_text()
 # free-swing test measures one; the workbook's 5e-4 is its heuristic fit to the balance loop
 FREE_SWING = SPEC.replace("D_p = 5e-4 ", "D_p = 5e-5 ")
 
-
-def _run(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "patchgen", *args], capture_output=True, text=True, cwd=ROOT)
 
 
 @pytest.fixture(scope="module")
@@ -41,7 +36,7 @@ def free_swing(tmp_path_factory):
 
 
 def test_the_patch_takes_the_pendulum_from_the_pump_and_holds_it_30_s(free_swing, tmp_path):
-    r = _run("swingup", str(free_swing), "-o", str(tmp_path / "out"), "--json")
+    r = run_patchgen("swingup", str(free_swing), "-o", str(tmp_path / "out"), "--json")
     assert r.returncode == 0, r.stderr
     got = json.loads(r.stdout)
     assert got["strategy"] == "energy" and got["reached_zone"] and got["held"] and got["hold_s"] == 30.0
@@ -76,7 +71,7 @@ def test_the_hand_off_is_inside_the_catch_zone_and_how_often_the_patch_catches_i
 
 
 def test_with_the_workbook_s_damping_the_pump_falls_short_and_says_so(tmp_path):
-    r = _run("swingup", "qube-servo-2", "-o", str(tmp_path / "out"), "--json")
+    r = run_patchgen("swingup", "qube-servo-2", "-o", str(tmp_path / "out"), "--json")
     assert r.returncode == 0, r.stderr
     got = json.loads(r.stdout)
     assert not got["reached_zone"] and not got["held"] and got["handoff_time_s"] is None
@@ -87,6 +82,6 @@ def test_with_the_workbook_s_damping_the_pump_falls_short_and_says_so(tmp_path):
 @pytest.mark.parametrize("option, value", [("--strategy", "supervisory"), ("--force-limit", "5"), ("--compare", None)])
 def test_a_cart_s_option_is_refused_in_one_line(option, value, tmp_path):
     args = ["swingup", "qube-servo-2", "-o", str(tmp_path / "out"), option] + ([value] if value else [])
-    r = _run(*args)
+    r = run_patchgen(*args)
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and option in r.stderr, r.stderr
     assert not (tmp_path / "out").exists()

@@ -22,6 +22,7 @@ from patchgen.plant.equations import PlantParams
 from patchgen.plant.plant_model import model_of
 from patchgen.plant.rotary_equations import RotaryParams
 from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.measured_plant import as_on_bench
 
 
 @dataclass(frozen=True)
@@ -70,6 +71,7 @@ def bench_plant(net: Netlist, plant: PlantParams | RotaryParams, bench: BenchPro
     BenchPlant
         States: the plant's, the actuator's force when it lags, two per filtered velocity.
     """
+    plant = as_on_bench(plant, bench)
     motor = motor_of(bench.actuator)
     lag = actuator_lag(bench) if lagged else None
     K_U = bench.actuator.K_U

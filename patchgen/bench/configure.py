@@ -46,6 +46,7 @@ from patchgen.plant.rotary_compiled import rotary_vector
 from patchgen.plant.rotary_equations import RotaryParams
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.measured_plant import as_on_bench
 
 LIMIT_TOL = 1e-9  # relative: an actuator limit at the rails, as a motor's a V_limit / (a amp_gain) computes it
 # the plant vector's first parameters (d: half track), those a --spread may draw
@@ -85,6 +86,7 @@ def engine_config(circuit: Circuit, plant: PlantParams | RotaryParams, bench: Be
         What the engine runs, and what was simulated, in words and SI units.
     """
     spread = dict(spread or {})
+    plant = as_on_bench(plant, bench)
     pm = model_of(plant)
     if pm is not CART and any(spread.values()):
         raise InputError("--spread", "", f"draws a cart's parameters; {pm.name}'s are not spread yet")
@@ -207,7 +209,7 @@ def engine_config(circuit: Circuit, plant: PlantParams | RotaryParams, bench: Be
         force_bandwidth_Hz=levels.force_bandwidth_Hz,
         saturation_V=imp.saturation_V, saturation_clipped=not ideal and rails,
         actuator=act_text, limit_switches=bool(bench.track.limit_switches),
-        half_track_m=plant.d / 2 if pm is CART else plant.alpha_limit, watchdog_m=bench.track.watchdog_m,
+        half_track_m=plant.d / 2 if pm is CART else cut, watchdog_m=bench.track.watchdog_m,
         plant_spread={k: v for k, v in spread.items() if v},
         bench_spread={k: list(v) for k, v in ranges.items()},
         bench_distribution=bench.uncertainty.distribution if ranges else None, plant=pm.name,

@@ -96,7 +96,8 @@ class SimSettings:
     saturation_clipped: bool
     actuator: str
     limit_switches: bool
-    half_track_m: float  # where the run ends at the position's limit (a rotary arm's cable: rad)
+    half_track_m: float | None  # where the run ends at the position's limit (a rotary arm's cable: rad; None: no
+    # limit, a slip ring)
     watchdog_m: float | None  # the lab's control cuts the motor at this |s| (none: the switches alone)
     plant_spread: dict[str, float]
     bench_spread: dict[str, list[float]] = field(default_factory=dict)  # key -> [low, high] each run drew from

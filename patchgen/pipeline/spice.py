@@ -31,6 +31,7 @@ from patchgen.plant.equations import PlantParams
 from patchgen.plant.plant_model import CART
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.measured_plant import as_on_bench
 from patchgen.spice.compare import Comparison, compare
 from patchgen.spice.deck import OPAMP_MODEL, SpiceDeck, SpiceSettings, spice_deck
 from patchgen.spice.run import SpiceResult, run_ngspice
@@ -129,7 +130,7 @@ def spice_job(inputs: Inputs, scenario: Scenario, plan: SpicePlan) -> SpiceJob:
                          "configuration it loads, which its client's simulator checks")
     d = design_on(spec, machine, bench)
     net = scaled_patch(d, machine, bench).netlist
-    plant = d.plant
+    plant = as_on_bench(d.plant, bench)
     levels = noise_and_drift([s.id for s in net.sensors], bench, machine, scenario, plan.ideal)
     noisy = {} if plan.ideal else {"reltol": NOISY_RELTOL, "noise_step_s": engine_step(net, plant, bench, machine,
                                                                                         scenario)}

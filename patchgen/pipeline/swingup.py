@@ -17,6 +17,7 @@ from patchgen.pipeline.scaling import scaled_patch
 from patchgen.plant.equations import PlantParams
 from patchgen.plant.plant_model import CART
 from patchgen.plant.rotary_equations import RotaryParams
+from patchgen.profiles.measured_plant import as_on_bench
 from patchgen.swingup.manoeuvre import BENCH_HOLD_S, Manoeuvre, manoeuvre
 from patchgen.swingup.rotary_manoeuvre import RotaryManoeuvre, rotary_manoeuvre
 from patchgen.swingup.run import StrategySummary, compare_strategies
@@ -125,7 +126,7 @@ def run_rotary_swingup(inputs: Inputs, plan: SwingupPlan) -> RotarySwingupReport
             raise InputError(option, "", why)
     d = design_on(spec, machine, bench)
     net = scaled_patch(d, machine, bench).netlist
-    m = rotary_manoeuvre(net, d.plant, bench, machine, plan.hold_s, plan.seed)
+    m = rotary_manoeuvre(net, as_on_bench(d.plant, bench), bench, machine, plan.hold_s, plan.seed)
     judged = as_patched_on_bench(d, net, machine, bench)
     pred = predict_on_bench(d, net, machine, bench, plan.sheet_runs_hold)
     return RotarySwingupReport(d, net, d.plant, plan, m, judged, pred)
@@ -153,7 +154,7 @@ def run_swingup(inputs: Inputs, plan: SwingupPlan, comparing=None) -> SwingupRep
         return run_rotary_swingup(inputs, plan)
     d = design_on(spec, machine, bench)
     net = scaled_patch(d, machine, bench).netlist
-    plant = d.plant
+    plant = as_on_bench(d.plant, bench)
     force = plan.force_limit_N or bench.actuator.force_limit_N
     m = manoeuvre(net, plant, bench, machine, d.K[:, :4], plan.strategy, force, plan.hold_s, plan.seed)
     comparison = None

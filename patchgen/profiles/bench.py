@@ -16,6 +16,7 @@ from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.validation import load_profile, validate
 from patchgen.plant.drive import INDUCTANCE
 from patchgen.plant.plant_model import CART, DEFAULT, PLANT_MODELS, ROTARY, PlantModel
+from patchgen.profiles.measured_plant import check_measured
 from patchgen.profiles.uncertainty import RANGE_FIELDS, BenchUncertainty, range_problem
 
 
@@ -186,6 +187,9 @@ class BenchProfile(InputModel):
     track: BenchTrack = BenchTrack()
     disturbance: BenchDisturbance = BenchDisturbance()
     uncertainty: BenchUncertainty = BenchUncertainty()
+    measured_plant: dict[str, Real] = Field(
+        default_factory=dict, description="the plant's figures as measured on this bench, where they differ from "
+        "a spec's: the bench's stages simulate them, the design keeps the spec's (patchgen.profiles.measured_plant)")
     recordings: list[Annotated[str, Field(min_length=1)]] = Field(
         default_factory=list, description="the recordings an identified profile was fitted to (patchgen identify)")
     scenarios: list[Annotated[str, Field(min_length=1, max_length=1000)]] = Field(
@@ -392,6 +396,7 @@ def check_bench(bench: BenchProfile, source: str) -> None:
     InputError
         The first bad range, naming ``uncertainty.<key>``.
     """
+    check_measured(bench, source)
     for q in bench.sensors.velocity_filter:
         if getattr(bench.sensors, q) is None:
             raise InputError(source, f"sensors.velocity_filter.{q}", "filters a velocity the bench gives no signal "

@@ -18,6 +18,7 @@ from patchgen.patch.build import build_patch
 from patchgen.plant.plant_model import CART, PlantModel
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.measured_plant import scaled_measured
 
 
 def variable(plant: PlantModel) -> tuple[str, ...]:
@@ -93,7 +94,7 @@ def _row(args) -> SweepRow:
         err = exc.message
     outcome = None
     if nominal_net is not None and scenario is not None:
-        outcome = _outcome(nominal_net, plant, machine, bench, scenario, runs)
+        outcome = _outcome(nominal_net, plant, machine, scaled_measured(bench, factors), scenario, runs)
     return SweepRow(label=label, factors=factors, K=[float(k) for k in d.K[0]], lqr_margins=d.lqr_margins,
                     lqg_margins=d.lqg_margins, pot_changes=changes, patch_error=err, outcome=outcome)
 

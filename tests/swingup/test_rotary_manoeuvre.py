@@ -7,12 +7,15 @@ from __future__ import annotations
 
 import json
 import math
+import tomllib
 
 import numpy as np
 import pytest
+import tomli_w
 
 from patchgen.bench.simulate import simulate
 from patchgen.design.lqg import design_on
+from patchgen.inputs.resources import resolve
 from patchgen.pipeline.inputs import load_inputs
 from patchgen.pipeline.scaling import scaled_patch
 from patchgen.swingup.rotary_energy import CATCH_ANGLE_RAD, wrap
@@ -71,7 +74,13 @@ def test_the_hand_off_is_inside_the_catch_zone_and_how_often_the_patch_catches_i
 
 
 def test_with_the_workbook_s_damping_the_pump_falls_short_and_says_so(tmp_path):
-    r = run_patchgen("swingup", "qube-servo-2", "-o", str(tmp_path / "out"), "--json")
+    """A bench whose pendulum has the workbook's D_p (the shipped bench without its measured one)."""
+    bench = tomllib.loads(resolve("bench", "qube-servo-2").read_text())
+    assert bench.pop("measured_plant") == {"D_p": 5e-5}
+    (tmp_path / "workbook.toml").write_text(tomli_w.dumps(bench))
+    spec = tmp_path / "qube.toml"
+    spec.write_text(SPEC.replace('bench = "qube-servo-2"', f'bench = "{tmp_path / "workbook.toml"}"'))
+    r = run_patchgen("swingup", str(spec), "-o", str(tmp_path / "out"), "--json")
     assert r.returncode == 0, r.stderr
     got = json.loads(r.stdout)
     assert not got["reached_zone"] and not got["held"] and got["handoff_time_s"] is None

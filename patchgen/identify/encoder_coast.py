@@ -18,7 +18,7 @@ import numba as nb
 import numpy as np
 
 from patchgen.identify import kalman
-from patchgen.identify.estimate import Z_REJECT
+from patchgen.identify.estimate import ML_KALMAN, Z_REJECT, Check, normal
 from patchgen.identify.filters import expm
 
 _JIT = {"cache": True, "error_model": "numpy"}
@@ -27,12 +27,15 @@ NOISE_FLOOR = 1e-6  # of the start's variance: the lowest a noise variance may r
 
 
 @nb.njit(**_JIT)
-def position_nll(z, dt, a, fs, lam, q, r, z0, v0, contrib):
-    """-log-likelihood (without its constant) of a coast's positions z read with variance r, from
-    (z0, v0) and the random force at its stationary spread; fs is the Coulomb deceleration with the
-    motion's sign. Each sample's term goes into contrib."""
+def driven_nll(z, u, dt, a, k, lam, q, r, z0, v0, pred, contrib):
+    """-log-likelihood (without its constant) of the positions z (a cart's, an arm's angle) read
+    with variance r, the body driven by k u[t] held from sample t to t + 1 (a motor's voltage, a
+    Coulomb deceleration), from (z0, v0) and the random acceleration at its stationary spread
+    (intensity q, relaxing at lam). Each sample's prediction goes into pred, its term into contrib.
+    The products of 3 x 3 matrices are written out: numba's ``@`` on them costs some twenty times
+    more in this loop."""
     M = np.zeros((4, 4))
-    M[0, 1], M[1, 1], M[1, 2], M[2, 2], M[1, 3] = 1.0, -a, 1.0, -lam, -fs
+    M[0, 1], M[1, 1], M[1, 2], M[2, 2], M[1, 3] = 1.0, -a, 1.0, -lam, 1.0
     E = expm(M * dt)
     V = np.zeros((6, 6))
     V[0, 1], V[1, 1], V[1, 2], V[2, 2] = -1.0, a, -1.0, lam
@@ -40,26 +43,18 @@ def position_nll(z, dt, a, fs, lam, q, r, z0, v0, contrib):
     V[2, 5] = q
     W = expm(V * dt)
     Phi = np.ascontiguousarray(E[:3, :3])
-    PhiT = np.ascontiguousarray(Phi.T)
-    c = np.ascontiguousarray(E[:3, 3])
-    Q = np.zeros((3, 3))
-    for i in range(3):
-        for j in range(3):
-            acc = 0.0
-            for k in range(3):
-                acc += W[3 + k, 3 + i] * W[k, 3 + j]
-            Q[i, j] = acc
-    for i in range(3):
-        for j in range(i):
-            Q[i, j] = Q[j, i] = 0.5 * (Q[i, j] + Q[j, i])
+    c = np.ascontiguousarray(E[:3, 3])  # the state's response to a unit acceleration held over a step
+    Q = np.ascontiguousarray(W[3:, 3:].T) @ np.ascontiguousarray(W[:3, 3:])  # Van Loan's: the noise over a step
+    Q = 0.5 * (Q + Q.T)
     x = np.array([z0, v0, 0.0])
     P = np.zeros((3, 3))
     P[2, 2] = q / (2 * lam)
-    T = np.zeros((3, 3))
+    T, R = np.zeros((3, 3)), np.zeros((3, 3))
     K = np.zeros(3)
     total = 0.0
     for t in range(z.size):
         s = P[0, 0] + r
+        pred[t] = x[0]
         e = z[t] - x[0]
         contrib[t] = 0.5 * (math.log(s) + e * e / s)
         total += contrib[t]
@@ -70,9 +65,25 @@ def position_nll(z, dt, a, fs, lam, q, r, z0, v0, contrib):
         for i in range(3):
             for j in range(3):
                 T[i, j] = P[i, j] - K[i] * P[0, j]
-        x = Phi @ x + c
-        P = Phi @ T @ PhiT + Q
+        x0, x1, x2, ku = x[0], x[1], x[2], k * u[t]
+        for i in range(3):
+            x[i] = Phi[i, 0] * x0 + Phi[i, 1] * x1 + Phi[i, 2] * x2 + c[i] * ku
+        for i in range(3):  # P <- Phi T Phi' + Q, through Phi T in R
+            for j in range(3):
+                R[i, j] = Phi[i, 0] * T[0, j] + Phi[i, 1] * T[1, j] + Phi[i, 2] * T[2, j]
+        for i in range(3):
+            for j in range(3):
+                P[i, j] = R[i, 0] * Phi[j, 0] + R[i, 1] * Phi[j, 1] + R[i, 2] * Phi[j, 2] + Q[i, j]
     return total
+
+
+@nb.njit(**_JIT)
+def position_nll(z, dt, a, fs, lam, q, r, z0, v0, contrib):
+    """-log-likelihood (without its constant) of a coast's positions z read with variance r, from
+    (z0, v0) and the random force at its stationary spread; fs is the Coulomb deceleration with the
+    motion's sign. Each sample's term goes into contrib. A coast is ``driven_nll`` with the
+    Coulomb term as its constant input."""
+    return driven_nll(z, np.full(z.size, -fs), dt, a, 1.0, lam, q, r, z0, v0, np.empty(z.size), contrib)
 
 
 def fit_position(z: np.ndarray, dt: float, sign: float, lam: float, start: tuple[float, float], r0: float
@@ -131,3 +142,20 @@ def fit_position(z: np.ndarray, dt: float, sign: float, lam: float, start: tuple
                             per_sample=terms, noise=NOISE, nll_many=many)
     nll(fit.p)
     return fit, zc, contrib.copy()
+
+
+def coast_estimates(fit: kalman.MlFit, zc: float, source: str, decay: str, coulomb_unit: str, what: str
+                    ) -> tuple[dict, list, np.ndarray]:
+    """What a coast's fit (fit_position's) gives: the decay (named ``decay``, 1/s) and, when the
+    likelihood-ratio z says so, the Coulomb deceleration (``coulomb``, in ``coulomb_unit``); the
+    check that says which (``what``: the friction's kind of push, "force" or "torque"); and the
+    free coast's parameters (z0, v0, a and f when kept)."""
+    coulomb = zc > Z_REJECT  # friction opposes the motion: a negative f is no friction
+    checks = [Check("Coulomb friction", zc, Z_REJECT, coulomb,
+                    f"likelihood-ratio z = {zc:.3g} for a constant friction {what}: " +
+                    ("the data show Coulomb friction (not in patchgen's plant, which is viscous)" if coulomb
+                     else "viscous friction alone"))]
+    est = {decay: normal(fit.p[0], fit.se(0), "1/s", ML_KALMAN, source, fit.dof_of(0))}
+    if coulomb:
+        est["coulomb"] = normal(fit.p[5], fit.se(5), coulomb_unit, ML_KALMAN, source, fit.dof_of(5))
+    return est, checks, (fit.p[:3] if not coulomb else np.append(fit.p[:3], fit.p[5]))

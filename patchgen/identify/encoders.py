@@ -24,7 +24,7 @@ from scipy.linalg import expm
 from scipy.signal import dlsim
 
 from patchgen.identify import encoder_coast, lsq
-from patchgen.identify.estimate import LSQ_HAC, ML_KALMAN, Z_REJECT, Check, Panel, TestFit, normal
+from patchgen.identify.estimate import LSQ_HAC, Z_REJECT, Check, Panel, TestFit, normal
 from patchgen.identify.recording import COUNTS, Recording
 from patchgen.profiles.bench import BenchProfile, VelocityFilter
 
@@ -159,15 +159,7 @@ def fit_coast_filtered(rec: Recording, per_m: float, filt: VelocityFilter, force
     a0 = max(math.log(abs(v[k0]) / max(abs(v[k1]), 1e-9)) / max(t[-1], dt), 1e-3)
     fit, zc, _ = encoder_coast.fit_position(z, dt, sign, 4.0 * force_bandwidth_Hz, (a0, v[k0]),
                                             max(1.0 / (12.0 * per_m * per_m), 1e-18))
-    coulomb = zc > Z_REJECT  # friction opposes the motion: a negative f is no friction
-    checks = [Check("Coulomb friction", zc, Z_REJECT, coulomb,
-                    f"likelihood-ratio z = {zc:.3g} for a constant friction force: " +
-                    ("the data show Coulomb friction (not in patchgen's plant, which is viscous)" if coulomb
-                     else "viscous friction alone"))]
-    est = {"decay": normal(fit.p[0], fit.se(0), "1/s", ML_KALMAN, rec.source, fit.dof_of(0))}
-    if coulomb:
-        est["coulomb"] = normal(fit.p[5], fit.se(5), "m/s^2", ML_KALMAN, rec.source, fit.dof_of(5))
-    p = fit.p[:3] if not coulomb else np.append(fit.p[:3], fit.p[5])
+    est, checks, p = encoder_coast.coast_estimates(fit, zc, rec.source, "decay", "m/s^2", "force")
     rate = filtered_rate(z_all, dt, filt)
     keep = t_all - t_all[0] >= SETTLE_TIMES / (filt.zeta * filt.wn_rad_s)
     y, w = rate[keep], w_all[keep]

@@ -23,17 +23,21 @@ def bench_test_cmd(spec, out_dir, bench_name, seed, as_json, force) -> None:
     Writes masses.toml, calibration.csv, actuator-step.csv, actuator-ramp.csv, coast-down-1.csv,
     coast-down-2.csv, incline.toml (not for a cart a DC motor drives), free-swing.csv, quiet.csv and
     integrator-drift.csv into DIR; encoders in counts, a motor with its back-EMF and rotor, as the
-    bench profile states them. `patchgen identify DIR -o OUT` takes the folder whole.
+    bench profile states them. For a rotary pendulum: links.toml, calibration.csv, motor-step.csv,
+    arm-coast-1.csv, arm-coast-2.csv, free-swing.csv and quiet.csv. `patchgen identify DIR -o OUT`
+    takes the folder whole.
     """
     from patchgen.identify.benchtest import FILES
+    from patchgen.identify.rotary_benchtest import ROTARY_FILES
     from patchgen.pipeline.identify import run_bench_test
     from patchgen.pipeline.inputs import load_inputs
+    from patchgen.plant.plant_model import ROTARY
     from patchgen.profiles.bench import load_bench
     from patchgen.render.outputs import check_out_dir, json_text, write_files
     from patchgen.render.terminal import say
 
-    check_out_dir(out_dir, FILES, force)
     inputs = load_inputs(spec, command="bench-test")
+    check_out_dir(out_dir, ROTARY_FILES if inputs.spec.plant_model is ROTARY else FILES, force)
     if bench_name is not None:  # any bench: its sensors need not be those the spec's patch reads
         inputs = inputs._replace(bench=load_bench(bench_name, "--bench", ""))
     report = run_bench_test(inputs, seed)

@@ -1,5 +1,5 @@
-"""`patchgen identify RECORDINGS... -o DIR`: a bench profile and the plant's friction and length
-from recordings of the standard tests."""
+"""`patchgen identify RECORDINGS... -o DIR`: a bench profile and the plant's figures from
+recordings of the standard tests."""
 
 from __future__ import annotations
 
@@ -22,12 +22,15 @@ from .options import FORCE, json_option, out_option
 @json_option("the report")
 @FORCE
 def identify_cmd(recordings, out_dir, base, bench_id, name, as_json, force) -> None:
-    """Fit a bench profile and the plant's friction and length to recordings of the standard tests.
+    """Fit a bench profile and the plant's figures to recordings of the standard tests.
 
     RECORDINGS are CSV recordings and TOML test figures, or folders of them (docs/identify.md says
-    what to record). Writes DIR/bench.toml (a bench profile every command takes through a spec's
-    bench = "DIR/bench.toml"), DIR/plant.toml (a [plant] table for a spec), DIR/report.md,
-    DIR/report.json and a fit plot per recording.
+    what to record). A cart's bench gives its actuator, friction and pendulum; a rotary pendulum's
+    (a base profile with plant = "rotary-pendulum") its motor, the arm's and pendulum's damping and
+    the pendulum's inertia. Writes DIR/bench.toml (a bench profile every command takes through a
+    spec's bench = "DIR/bench.toml"; a rotary bench's holds the plant as identified in
+    [measured_plant]), DIR/plant.toml (a [plant] table for a spec), DIR/report.md, DIR/report.json
+    and a fit plot per recording.
     """
     from patchgen.inputs.errors import InputError
     from patchgen.pipeline.identify import run_identify

@@ -40,6 +40,10 @@ G_B2 = 9.81  # m/s^2: the gravity equation B.2 is written with
 G_TABLE_B1 = 9.807  # m/s^2: table B.1's
 
 
+ASSUMED_MASS_UNCERTAINTY_KG = 0.5e-3  # a kitchen scale's half gram (assumed)
+ASSUMED_LENGTH_UNCERTAINTY_M = 0.5e-3  # a ruler's half millimetre (assumed)
+
+
 class Masses(InputModel):
     """Thesis B.1's direct measurements: the masses (weighed), gravity and the track's length."""
 
@@ -73,10 +77,27 @@ class Incline(InputModel):
     reported_source: str = Field(default="", max_length=200)
 
 
-FIGURES = {"masses": Masses, "incline": Incline}
+class Links(InputModel):
+    """A rotary pendulum's direct measurements: each link weighed and measured (uniform rods, as the
+    plant takes them when l and J are left out), gravity, and the motor's terminal resistance read
+    on an ohmmeter; each with its standard uncertainty."""
+
+    test: Literal["links"]
+    m_r_kg: Real = bounded(1e-3, 10, description="the rotary arm's mass")
+    L_r_m: Real = bounded(0.01, 2, description="the motor's axis to the pendulum's pivot")
+    m_p_kg: Real = bounded(1e-3, 10, description="the pendulum's mass")
+    L_p_m: Real = bounded(0.01, 2, description="the pendulum, pivot to tip")
+    R_m_ohm: Real = bounded(1e-3, 1e3, description="the motor's terminal resistance (ohmmeter, rotor still)")
+    g_m_per_s2: Real = bounded(1, 30, default=9.81)
+    mass_uncertainty_kg: Real = bounded(0, 1, default=ASSUMED_MASS_UNCERTAINTY_KG)
+    length_uncertainty_m: Real = bounded(0, 1, default=ASSUMED_LENGTH_UNCERTAINTY_M)
+    R_m_uncertainty_ohm: Real = bounded(0, 100, default=0.0, description="the ohmmeter's standard uncertainty")
 
 
-def read_figures(path: str | Path) -> Masses | Incline:
+FIGURES = {"masses": Masses, "incline": Incline, "links": Links}
+
+
+def read_figures(path: str | Path) -> Masses | Incline | Links:
     """Read a test-figures TOML file.
 
     Parameters

@@ -31,18 +31,21 @@ from pathlib import Path
 
 from patchgen.identify import actuator, encoders, friction, motor, pendulum, sensors
 from patchgen.identify.estimate import Check, Estimate, Parameter, TestFit, combine, normal, welch
-from patchgen.identify.figures import G_TABLE_B1, Incline, Masses, read_figures
+from patchgen.identify.figures import G_TABLE_B1, Incline, Links, Masses, read_figures
 from patchgen.identify.kalman import FitError
 from patchgen.identify.plausible import check_fit
 from patchgen.identify.recording import Recording, expand, read_recording
+from patchgen.identify.rotary_identify import check_links, rotary_identify
 from patchgen.inputs.drive_fields import motor_of
 from patchgen.inputs.errors import InputError
 from patchgen.plant.cart_pendulum import MEASURED
+from patchgen.plant.plant_model import ROTARY
 from patchgen.profiles.bench import BenchProfile, load_bench
 
 FITTED_COLUMN = {"actuator_step": "force_N", "actuator_ramp": "force_N", "coast_down": "s_dot_V",
                  "free_swing": "theta_V", "integrator_drift": "out_V"}  # the channel each fit explains
 MIN_LAG_S = 1e-3  # a bench lag shorter than this is written as a pure gain (the profile's own floor)
+ROTARY_TESTS = ("motor_step", "arm_coast")  # recorded on a rotary pendulum's bench alone
 DEFAULT_BASE = "uw-1991"  # the base profile when none is given and no recording names its bench
 
 
@@ -61,11 +64,11 @@ class Identification:
     profile: BenchProfile | None = None  # the base profile itself
 
 
-def read_all(paths: list[str]) -> list[Recording | tuple[str, Masses | Incline]]:
+def read_all(paths: list[str]) -> list[Recording | tuple[str, Masses | Incline | Links]]:
     """Every recording and figures file the paths name (folders expanded), read and checked, each
     once: a file named twice (by two paths) or two files of identical samples or figures would count
     one test's data as two, and narrow its interval as new data would."""
-    out: list[Recording | tuple[str, Masses | Incline]] = []
+    out: list[Recording | tuple[str, Masses | Incline | Links]] = []
     seen: dict[object, str] = {}
     for f in expand(paths):
         suffix = Path(f).suffix
@@ -74,7 +77,7 @@ def read_all(paths: list[str]) -> list[Recording | tuple[str, Masses | Incline]]
             raise InputError(f, "test", f"given twice (also as {seen[real]}): a recording counts once")
         seen[real] = f
         if suffix == ".csv":
-            item: Recording | tuple[str, Masses | Incline] = read_recording(f)
+            item: Recording | tuple[str, Masses | Incline | Links] = read_recording(f)
             content = (item.test, tuple((k, v.tobytes()) for k, v in sorted(item.columns.items())))
         elif suffix == ".toml":
             item = (f, read_figures(f))
@@ -139,12 +142,23 @@ def identify(paths: list[str], base: BenchProfile | None = None) -> Identificati
         The fits and the parameters; InputError for a bad or unexciting recording.
     """
     items = read_all(paths)
+    recs = [it for it in items if isinstance(it, Recording)]
+    base, notes = base_profile(recs, base)
+    if base.plant == ROTARY.name:  # its own tests (patchgen.identify.rotary_identify)
+        figures = [it for it in items if isinstance(it, tuple)]
+        result = Identification([], {}, {}, {}, warnings=notes, base=base.id, profile=base)
+        rotary_identify(result, recs, check_links(figures, base), base)
+        return result
+    for r in recs:
+        if r.test in ROTARY_TESTS:
+            raise r.error("", f"{r.test} is a rotary pendulum's test: bench {base.id} is a cart's (give --base a "
+                              "rotary bench)")
+    for src, _ in (it for it in items if isinstance(it, tuple) and isinstance(it[1], Links)):
+        raise InputError(src, "test", f"links figures are a rotary pendulum's: bench {base.id} is a cart's")
     masses = [(src, f) for it in items if isinstance(it, tuple) for src, f in [it] if isinstance(f, Masses)]
     if len(masses) > 1:
         raise InputError(masses[1][0], "test", f"masses given twice (also in {masses[0][0]})")
     mass_src, mass = masses[0] if masses else ("", None)
-    recs = [it for it in items if isinstance(it, Recording)]
-    base, notes = base_profile(recs, base)
     fits: list[TestFit] = []
     for r in recs:
         if r.test == "calibration":

@@ -40,18 +40,21 @@ from patchgen.identify.cells import (
 )
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.inputfile import decode_text, read_bytes
-from patchgen.plant.cart_pendulum import MEASURED, RATE_OF, STATE_UNITS, STATES
+from patchgen.plant.plant_model import PLANT_MODELS
 
 MAX_RECORDING_BYTES = 64 << 20  # 64 MiB: ten minutes of four channels at 2 kHz is some 40 MB of text
 CLOCK_TOLERANCE = 0.01  # a sample interval may differ from the median by 1 %: a recorder's clock, not a gap
 COUNTS = "counts"  # an encoder's unit: whole counts, turned into SI units by the bench profile's
-ENCODER_TESTS = ("calibration", "coast_down", "free_swing")  # the tests where a count stands for a pot's volts
+ENCODER_TESTS = ("calibration", "coast_down", "free_swing", "motor_step", "arm_coast")  # where a count stands
+# for a pot's volts
+
 
 def _measured(q: str) -> tuple[tuple[str, ...], str]:
-    """The units a measured quantity may be recorded in, and what it is: a position on its sensor
-    (V) or set by hand (SI); a rate on its sensor alone."""
-    what, unit = next(st.what for st in STATES if st.name == q), STATE_UNITS[q]
-    if q in RATE_OF:
+    """The units a measured quantity (of any plant) may be recorded in, and what it is: a position
+    on its sensor (V) or set by hand (SI); a rate on its sensor alone."""
+    pm = next(pm for pm in PLANT_MODELS.values() if q in pm.measurable)
+    what, unit = next(st.what for st in pm.states if st.name == q), pm.units[q]
+    if q in pm.rate_of:
         return ("V", COUNTS, unit), (f"{what}: its sensor's voltage (V), an encoder's whole counts ({COUNTS}) "
                                      f"or a value set by hand ({unit})")
     return ("V",), f"{what}: its sensor's voltage"
@@ -61,7 +64,8 @@ QUANTITIES = {  # quantity -> the units it may be recorded in, and what it is
     "t": (("s",), "time"),
     "u_c": (("V",), "the actuator's command voltage"),
     "force": (("N",), "the force on the cart read on a force gauge"),
-    **{q: _measured(q) for q in MEASURED},
+    "V_m": (("V",), "the motor's voltage, at its terminals"),
+    **{q: _measured(q) for pm in PLANT_MODELS.values() for q in pm.measurable},
     "out": (("V",), "an amplifier's output"),
 }
 
@@ -86,7 +90,7 @@ class TestKind:
 
 
 TESTS = {t.name: t for t in (
-    TestKind("calibration", (), optional=("s_m", "s_V", "theta_rad", "theta_V"), min_samples=3,
+    TestKind("calibration", (), optional=("s_m", "s_V", "theta_rad", "theta_V", "alpha_rad", "alpha_V"), min_samples=3,
              identifies="sensor constants (V/m, V/rad) from positions and angles set by hand"),
     TestKind("actuator_step", ("t_s", "u_c_V", "force_N"), min_samples=200,
              identifies="K_U, the lag tau, a zero at the origin or not, a second-order term or not"),
@@ -96,7 +100,11 @@ TESTS = {t.name: t for t in (
              identifies="b_VF / (M + m), Coulomb friction when the data show it, the tachometer constant"),
     TestKind("free_swing", ("t_s", "theta_V"), min_samples=500,
              identifies="the effective length l from the period, c from the decay"),
-    TestKind("quiet", ("t_s",), any_of=("s_V", "theta_V", "s_dot_V"), min_samples=1000,
+    TestKind("motor_step", ("t_s", "V_m_V", "alpha_V"), min_samples=200,
+             identifies="a rotary arm's decay and drive (1/s, rad/s^2 per V), the pendulum fixed to it"),
+    TestKind("arm_coast", ("t_s", "alpha_V"), min_samples=100,
+             identifies="a rotary arm's decay with the amplifier off (D_r / J_0)"),
+    TestKind("quiet", ("t_s",), any_of=("s_V", "theta_V", "s_dot_V", "alpha_V"), min_samples=1000,
              identifies="each sensor's noise level and bandwidth"),
     TestKind("integrator_drift", ("t_s", "out_V"), min_samples=100,
              identifies="an integrator's drift rate", max_dt=10.0),

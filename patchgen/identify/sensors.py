@@ -25,6 +25,7 @@ from patchgen.identify.recording import Recording
 QUIET_LIMIT = 8.0  # a quiet sample beyond this many noise levels (median-based) means the rig moved
 QUIET_BLOCKS = 10  # the recording in this many parts, for a noise scale that a disturbance in one part leaves alone
 SENSORS = {"s_V": ("s", "V/m", "s_m", "m"), "theta_V": ("theta", "V/rad", "theta_rad", "rad"),
+           "alpha_V": ("alpha", "V/rad", "alpha_rad", "rad"),
            "s_counts": ("s_counts", "counts/m", "s_m", "m"), "theta_counts": ("theta_counts", "counts/rad",
                                                                                 "theta_rad", "rad")}
 
@@ -155,7 +156,7 @@ def fit_quiet(rec: Recording) -> TestFit:
     """
     t, dt = rec.columns["t_s"], rec.dt
     est, panels, notes = {}, [], []
-    for col in ("s_V", "theta_V", "s_dot_V"):
+    for col in ("s_V", "theta_V", "s_dot_V", "alpha_V"):
         if col not in rec.columns:
             continue
         x = rec.columns[col]

@@ -9,8 +9,11 @@ from patchgen.design.model import plant_params
 from patchgen.identify.benchtest import bench_test_files
 from patchgen.identify.identify import Identification, identify
 from patchgen.identify.recording import expand
+from patchgen.identify.rotary_benchtest import rotary_bench_test_files
 from patchgen.pipeline.inputs import Inputs
+from patchgen.plant.plant_model import ROTARY
 from patchgen.profiles.bench import BenchProfile
+from patchgen.profiles.measured_plant import as_on_bench
 
 
 @dataclass(frozen=True)
@@ -46,6 +49,10 @@ def run_bench_test(inputs: Inputs, seed: int) -> BenchTestReport:
     """Record every standard bench test of the spec's plant on the bench (noise and random forces
     as the profile says; the same seed, the same bytes)."""
     spec, machine, bench = inputs
-    files = bench_test_files(plant_params(spec), bench, machine, seed, label=f"{spec.name} on bench {bench.id}")
+    plant, label = as_on_bench(plant_params(spec), bench), f"{spec.name} on bench {bench.id}"
+    if spec.plant_model is ROTARY:
+        files = rotary_bench_test_files(plant, bench, seed, label=label)
+    else:
+        files = bench_test_files(plant, bench, machine, seed, label=label)
     return BenchTestReport(spec.name, bench.id, seed, files)
 

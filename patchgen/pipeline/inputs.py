@@ -17,12 +17,11 @@ from patchgen.profiles.bench import BenchProfile, bench_source, check_reads, loa
 from patchgen.profiles.machine import MachineProfile, load_machine
 
 MAX_SPICE_POINTS = 10**6  # transient points of an ngspice run (duration / --step)
-# the plant models each command takes: every one the rotary pendulum too but bench-test (identify,
-# which reads recordings, takes no spec), which takes the cart so far
+# the plant models each command takes (identify reads recordings and takes no spec)
 EVERY_PLANT = tuple(PLANT_MODELS)
 COMMAND_PLANTS = {command: EVERY_PLANT
                   for command in ("design", "patch", "simulate", "check", "export", "spice", "recommend", "swingup",
-                                  "sweep")}
+                                  "sweep", "bench-test")}
 
 
 def plants_of(command: str) -> tuple[str, ...]:

@@ -9,6 +9,8 @@ from rich.markup import escape
 
 from patchgen.identify.identify import Identification
 from patchgen.identify.profile import bench_toml, plant_toml
+from patchgen.identify.rotary_profile import rotary_bench_toml, rotary_plant_toml
+from patchgen.plant.plant_model import ROTARY
 from patchgen.profiles.bench import BenchProfile
 from patchgen.render.identify_plots import fit_plot, plot_name
 from patchgen.render.identify_report import report_json, report_markdown
@@ -46,8 +48,12 @@ def identify_files(result: Identification, files: list[str], base: BenchProfile,
         if drawn:
             plots[f.source] = name_png
             out.update(drawn)
-    out["bench.toml"] = bench_toml(result, base, bench_id, name, files).encode()
-    out["plant.toml"] = plant_toml(result, files).encode()
+    if base.plant == ROTARY.name:
+        out["bench.toml"] = rotary_bench_toml(result, base, bench_id, name, files).encode()
+        out["plant.toml"] = rotary_plant_toml(result, files).encode()
+    else:
+        out["bench.toml"] = bench_toml(result, base, bench_id, name, files).encode()
+        out["plant.toml"] = plant_toml(result, files).encode()
     out["report.md"] = report_markdown(result, files, plots).encode()
     out["report.json"] = report_json(result, files, plots).encode()
     return out

@@ -126,7 +126,7 @@ def run_rotary_swingup(inputs: Inputs, plan: SwingupPlan) -> RotarySwingupReport
             raise InputError(option, "", why)
     d = design_on(spec, machine, bench)
     net = scaled_patch(d, machine, bench).netlist
-    m = rotary_manoeuvre(net, as_on_bench(d.plant, bench), bench, machine, plan.hold_s, plan.seed)
+    m = rotary_manoeuvre(net, d.plant, bench, machine, d.K[:, :4], plan.hold_s, plan.seed)
     judged = as_patched_on_bench(d, net, machine, bench)
     pred = predict_on_bench(d, net, machine, bench, plan.sheet_runs_hold)
     return RotarySwingupReport(d, net, d.plant, plan, m, judged, pred)

@@ -100,10 +100,34 @@ def lyapunov_matrix(
         The symmetric 4 x 4 matrix P.
     """
     A, B = linear_matrices(plant)
+    w = default_spread(plant) ** -2.0 if weights is None else np.asarray(weights, dtype=float)
+    return closed_loop_cost(A, B, K, force_limit, w)
+
+
+def closed_loop_cost(A: np.ndarray, B: np.ndarray, K: np.ndarray, input_limit: float,
+                     weights: np.ndarray) -> np.ndarray:
+    """P with (A-BK)^T P + P (A-BK) = -(diag(weights) + K^T K / input_limit^2), for any plant's
+    linear model about upright (the cart's force, the rotary pendulum's voltage).
+
+    Parameters
+    ----------
+    A, B : numpy.ndarray
+        The linear model, 4 x 4 and 4 x 1.
+    K : array_like
+        State-feedback gain; its first four entries are used.
+    input_limit : float
+        The input's largest magnitude (N or V): an input that saturates counts as far from upright.
+    weights : array_like
+        The diagonal of the states' weight.
+
+    Returns
+    -------
+    numpy.ndarray
+        The symmetric 4 x 4 matrix P.
+    """
     k = np.asarray(K, dtype=float).ravel()[:STATE_COUNT]
     Acl = A - B @ k[None, :]
-    w = default_spread(plant) ** -2.0 if weights is None else np.asarray(weights, dtype=float)
-    P = solve_continuous_lyapunov(Acl.T, -(np.diag(w) + np.outer(k, k) / force_limit**2))
+    P = solve_continuous_lyapunov(Acl.T, -(np.diag(np.asarray(weights, dtype=float)) + np.outer(k, k) / input_limit**2))
     return 0.5 * (P + P.T)
 
 

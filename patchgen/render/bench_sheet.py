@@ -17,6 +17,7 @@ from patchgen.pipeline.prediction import BenchPrediction
 from patchgen.plant.plant_model import CART, PlantModel
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.measured_plant import as_on_bench, measured_words
 from patchgen.profiles.uncertainty import UNITS
 from patchgen.render.patchfiles import patch_files
 from patchgen.render.sheet import SheetSection
@@ -55,13 +56,14 @@ def bench_section(pred: BenchPrediction, d: Design, machine: MachineProfile, ben
     else:
         randoms = (f"a random torque {dist.arm_torque_Nm_rms:g} N m rms on the arm and force "
                    f"{dist.tip_force_N_rms:g} N rms at the tip")
-        limit = d.spec.plant.alpha_limit
+        limit = as_on_bench(d.plant, bench).alpha_limit
         ends = f"the cable's wind-up at +/-{math.degrees(limit):g} deg" if math.isfinite(limit) else "no cable limit"
     note = (f"From this netlist on the {bench_named(bench)}: actuator {bench.actuator.model} {bench.actuator.tau:g} s, "
             f"dead zone +/-{bench.actuator.dead_zone_V:g} V, {bench.actuator.force_limit_N:g} {pm.input_unit}; "
             f"sensor noise; {randoms} (to {dist.bandwidth_Hz:g} Hz); drift "
             f"{_drift_text(net, machine)} ({machine.imperfections.drift_source}); "
-            f"rails +/-{machine.imperfections.saturation_V:g} V; {ends}. "
+            f"rails +/-{machine.imperfections.saturation_V:g} V; {ends}"
+            + "".join(f"; the plant as this bench has it, {w}" for w in measured_words(d.plant, bench)) + ". "
             + diagnosis_note(pred) + (" " + ranges_note(pred.corners) if pred.corners is not None else ""))
     return SheetSection("Predicted on the bench", header, rows, note, banner=failure_banner(bench.id, pred))
 

@@ -90,3 +90,10 @@ def test_a_figure_the_plant_cannot_have_is_one_line_naming_it(tmp_path, table, f
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and str(bench) in lines[0] and field in lines[0] and words in lines[0], r.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_the_sheet_says_which_figures_the_bench_has_its_own(tmp_path):
+    r = run_patchgen("patch", "qube-servo-2", "-o", str(tmp_path / "out"))
+    assert r.returncode == 0, r.stderr
+    sheet = (tmp_path / "out" / "patch-sheet.md").read_text()
+    assert sheet.count("the plant as this bench has it, D_p = 5e-05 (spec 0.0005)") == 1

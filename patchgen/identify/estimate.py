@@ -195,3 +195,8 @@ def combine(estimates: Sequence[Estimate]) -> tuple[Estimate, Check | None]:
             "the bench changed between them, or the model misses something" if q > limit else
             f"the {len(v)} recordings agree (Cochran's Q {q:.3g} <= {limit:.3g})")
     return est, Check("agreement", q, limit, q > limit, text)
+
+
+def abs_estimate(e: Estimate) -> Estimate:
+    """The magnitude of a signed estimate (its interval reflected when the value is negative)."""
+    return e if e.value >= 0 else Estimate(-e.value, -e.high, -e.low, e.unit, e.method, e.source, e.dof, e.std_error)

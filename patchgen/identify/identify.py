@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from patchgen.identify import actuator, encoders, friction, motor, pendulum, sensors
-from patchgen.identify.estimate import Check, Estimate, Parameter, TestFit, combine, normal, welch
+from patchgen.identify.estimate import Check, Estimate, Parameter, TestFit, abs_estimate, combine, normal, welch
 from patchgen.identify.figures import G_TABLE_B1, Incline, Links, Masses, read_figures
 from patchgen.identify.kalman import FitError
 from patchgen.identify.plausible import check_fit
@@ -220,11 +220,6 @@ def _fit(r: Recording, base: BenchProfile, k_theta: float, g: float, mass: Masse
     if r.test == "integrator_drift":
         return sensors.fit_drift(r)
     return None
-
-
-def abs_estimate(e: Estimate) -> Estimate:
-    """The magnitude of a signed estimate (its interval reflected when the value is negative)."""
-    return e if e.value >= 0 else Estimate(-e.value, -e.high, -e.low, e.unit, e.method, e.source, e.dof, e.std_error)
 
 
 def _combined(result: Identification, estimates: list[Estimate], what: str) -> Estimate:

@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from patchgen.identify import pendulum, rotary_motor, sensors
-from patchgen.identify.estimate import DELTA, Estimate, Parameter, TestFit, combine, delta, normal
+from patchgen.identify.estimate import DELTA, Estimate, Parameter, TestFit, abs_estimate, combine, delta, normal
 from patchgen.identify.figures import Links
 from patchgen.identify.kalman import FitError
 from patchgen.identify.recording import Recording
@@ -53,6 +53,8 @@ def _fit(rec: Recording, base: BenchProfile, links: Links | None) -> TestFit | N
         return sensors.fit_calibration(rec)
     if rec.test == "quiet":
         return sensors.fit_quiet(rec)
+    if rec.test == "integrator_drift":  # the machine's, on any bench
+        return sensors.fit_drift(rec)
     if rec.test == "motor_step":
         return rotary_motor.fit_motor_step(rec, _per_rad(base, "alpha", rec), band)
     if rec.test == "arm_coast":
@@ -62,7 +64,7 @@ def _fit(rec: Recording, base: BenchProfile, links: Links | None) -> TestFit | N
                                   links.m_p_kg if links else None, links.mass_uncertainty_kg if links else 0.0,
                                   "theta_counts")
     raise rec.error("test", f"{rec.test} is a cart's test: a rotary bench takes calibration, quiet, motor_step, "
-                            "arm_coast and free_swing")
+                            "arm_coast, free_swing and integrator_drift")
 
 
 def rotary_identify(result, recs: list[Recording], links: tuple[str, Links] | None, base: BenchProfile) -> None:
@@ -76,6 +78,9 @@ def rotary_identify(result, recs: list[Recording], links: tuple[str, Links] | No
             raise r.error("", f"the {r.test} fit fails: {exc}") from None
         result.fits.append(fit)
     _sensors(result, base)
+    drift = _pick(result, "integrator_drift", "drift")
+    if drift:
+        result.extra["drift_V_per_s"] = _combined(result, [abs_estimate(e) for e in drift], "drift rate")
     if fig is None:
         result.warnings.append("no links figures (test = \"links\"): the arm's inertia, hence the motor and the "
                                "dampings, cannot be had from the decays alone")

@@ -127,3 +127,16 @@ def test_another_plant_s_test_is_one_line(qube, tmp_path, bench, names):
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert names.replace("_", "") in r.stderr.replace("_", "") and "Traceback" not in r.stderr
     assert not (tmp_path / "id").exists()
+
+
+def test_the_machine_s_drift_is_read_on_a_rotary_bench_too(qube, tmp_path):
+    """integrator_drift is the machine's, recorded beside any bench: a cart bench's recording of it
+    is fitted on the rotary's too and reported."""
+    inputs, _ = qube
+    cart = run_bench_test(load_inputs("bench-recommended", command="bench-test"), 0).recordings
+    folder = _write(tmp_path / "rec", {**run_bench_test(inputs, 0).recordings,
+                                       "integrator-drift.csv": cart["integrator-drift.csv"]})
+    r = identify([folder])
+    drift = r.extra["drift_V_per_s"]
+    assert drift.value > 0 and drift.low < drift.value < drift.high
+    assert any(f.test == "integrator_drift" for f in r.fits) and "D_p" in r.plant

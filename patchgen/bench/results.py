@@ -10,6 +10,7 @@ import numpy as np
 
 from patchgen.bench.engine import BatchOutput
 from patchgen.inputs.scenario import Scenario
+from patchgen.plant.plant_model import PLANT_MODELS
 
 PERCENTILES = (5, 50, 95)
 
@@ -137,9 +138,20 @@ class SimResult:
             "seed": self.seed,
             "settings": asdict(self.settings),
             "amplifiers": list(self.amplifiers),
-            "first_run": _jsonable(asdict(self.runs[0])),
-            "distribution": _jsonable(asdict(self.distribution)),
+            "first_run": _position_named(_jsonable(asdict(self.runs[0])), self.settings.plant),
+            "distribution": _position_named(_jsonable(asdict(self.distribution)), self.settings.plant),
         }
+
+
+def _position_named(data: dict, plant: str) -> dict:
+    """``data`` with the largest |position| under its plant's key (max_abs_alpha_rad on a rotary arm;
+    the runs' field is the cart's max_abs_s_m), at the top and among the percentiles."""
+    key = PLANT_MODELS[plant].position_key
+    rename = lambda d: {key if k == "max_abs_s_m" else k: v for k, v in d.items()}
+    out = rename(data)
+    if isinstance(out.get("percentiles"), dict):
+        out["percentiles"] = rename(out["percentiles"])
+    return out
 
 
 def run_summaries(parts: list[BatchOutput], amp_ids: tuple[str, ...], first_run: int = 0,

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 from patchgen.design.lqg import Design
 from patchgen.patch.netlist import Netlist
+from patchgen.plant.plant_model import CART, PLANT_MODELS
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 
@@ -71,6 +72,7 @@ class BenchPrediction:
     corners: BenchStudy | None
     runs_hold: int
     levels: tuple[AmplifierLevel, ...] = ()  # each amplifier's expected peak and signal-to-noise ratio
+    plant: str = CART.name  # the plant model predicted for: its words name the figures
 
     def peaks_V(self) -> dict[str, float]:
         """Each amplifier's largest |output| over every scenario's runs (V, before the rails)."""
@@ -95,7 +97,8 @@ class BenchPrediction:
         return {"holds": self.holds, "runs_hold": self.runs_hold,
                 "scenarios": [{"name": p.scenario, "runs": p.runs, "fraction_held": p.fraction_held,
                                "first_trip_s": p.first_trip_s, "first_fall_s": p.first_fall_s,
-                               "max_abs_theta_deg": p.max_theta_deg, "max_abs_s_m": p.max_s_m,
+                               "max_abs_theta_deg": p.max_theta_deg,
+                               PLANT_MODELS[self.plant].position_key: p.max_s_m,
                                "overloads": p.overloads} for p in self.predictions],
                 "linear": [{"actuator": lp.actuator, "verdict": lp.verdict, "line": lp.line()} for lp in self.loops],
                 "amplifier_levels": [lv.as_dict() for lv in self.levels],
@@ -137,5 +140,5 @@ def predict_on_bench(d: Design, net: Netlist, machine: MachineProfile, bench: Be
     if spread and corners is None:
         corners = study(net, d.plant, bench, machine, load_scenario(HOLD_SCENARIO), corner_runs=runs_hold)
     pred = BenchPrediction(tuple(preds), tuple(diagnose(net, d.plant, bench)), corners if spread else None,
-                           runs_hold)
+                           runs_hold, plant=d.spec.plant_model.name)
     return replace(pred, levels=amplifier_levels(net, machine, pred.peaks_V()))

@@ -130,6 +130,12 @@ class PlantModel:
         return f"max |{self.position}| ({self.units[self.position]})"
 
     @property
+    def position_key(self) -> str:
+        """The JSON key of a run's largest |position|, named with its state and unit: "max_abs_s_m",
+        "max_abs_alpha_rad"."""
+        return f"max_abs_{self.position}_{self.units[self.position]}"
+
+    @property
     def parameter_names(self) -> tuple[str, ...]:
         """The parameters' names, in order."""
         return tuple(p.name for p in self.parameters)

@@ -15,7 +15,7 @@ from patchgen.inputs.errors import InputError
 from patchgen.inputs.scenario import Scenario
 from patchgen.inputs.spec import DesignSpec
 from patchgen.patch.build import build_patch
-from patchgen.plant.plant_model import CART, PlantModel
+from patchgen.plant.plant_model import CART, PLANT_MODELS, PlantModel
 from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
 from patchgen.profiles.measured_plant import scaled_measured
@@ -76,7 +76,7 @@ def _outcome(net, plant, machine, bench, sc: Scenario, runs) -> dict:
     return {"scenario": sc.name, "runs": runs, "fraction_held": r.distribution.fraction_held,
             "bench_loop": diagnose(net, plant, bench)[-1].verdict,
             "max_abs_theta_deg": max(x.max_abs_theta_deg for x in r.runs),
-            "max_abs_s_m": max(x.max_abs_s_m for x in r.runs)}
+            PLANT_MODELS[r.settings.plant].position_key: max(x.max_abs_s_m for x in r.runs)}
 
 
 def _row(args) -> SweepRow:

@@ -185,3 +185,6 @@ def test_an_arm_without_a_cable_limit_simulates_and_says_so(tmp_path):
     assert r.returncode == 0, r.stderr
     got = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert got["settings"]["half_track_m"] is None and got["distribution"]["fraction_held"] == 1.0
+    # the arm's largest excursion is named as the arm's, in rad (a cart's is max_abs_s_m)
+    assert 0.0 < got["first_run"]["max_abs_alpha_rad"] < 1.0 and "max_abs_s_m" not in got["first_run"]
+    assert set(got["distribution"]["percentiles"]["max_abs_alpha_rad"]) >= {"p50", "p95"}

@@ -17,7 +17,14 @@ from patchgen.inputs.validation import load_profile, validate
 from patchgen.plant.drive import INDUCTANCE
 from patchgen.plant.plant_model import CART, DEFAULT, PLANT_MODELS, ROTARY, PlantModel
 from patchgen.profiles.measured_plant import check_measured
-from patchgen.profiles.uncertainty import RANGE_FIELDS, BenchUncertainty, range_problem
+from patchgen.profiles.uncertainty import (
+    RANGE_FIELDS,
+    BenchUncertainty,
+    bench_at,
+    nominal,
+    nominal_or_none,
+    range_problem,
+)
 
 
 def _motor_only(value, info):
@@ -337,53 +344,6 @@ def _scenarios_found(bench: BenchProfile, where) -> BenchProfile:
         found.append(str(path))
         load_scenario(found[-1]).judged()
     return bench.model_copy(update={"scenarios": found})
-
-
-def nominal_or_none(bench: BenchProfile, key: str) -> float | None:
-    """The profile's own value of an uncertain parameter, None where the bench has no such signal."""
-    path = RANGE_FIELDS[key]
-    section = getattr(bench, path[0])
-    return getattr(section, path[1]) if len(path) == 2 else nominal(bench, key)
-
-
-def nominal(bench: BenchProfile, key: str) -> float:
-    """The profile's own value of an uncertain parameter (a RANGE_FIELDS key; 0 for a sensor
-    noise the profile does not state)."""
-    path = RANGE_FIELDS[key]
-    section = getattr(bench, path[0])
-    if len(path) == 3:
-        return float(getattr(section, path[1]).get(path[2], 0.0))
-    return float(getattr(section, path[1]))
-
-
-def bench_at(bench: BenchProfile, values: dict[str, float]) -> BenchProfile:
-    """The bench with some of its uncertain parameters (RANGE_FIELDS keys) at the given values.
-
-    Parameters
-    ----------
-    bench : BenchProfile
-        The nominal bench.
-    values : dict of str to float
-        Parameter key -> value.
-
-    Returns
-    -------
-    BenchProfile
-        A copy with those values (not validated: see check_bench).
-    """
-    data = bench.model_dump()
-    for key, v in values.items():
-        path = RANGE_FIELDS[key]
-        target = data[path[0]]
-        if len(path) == 3:
-            target = target[path[1]]
-        target[path[-1]] = float(v)
-    touched = {}  # section -> the fields set (a whole dump would put plain dicts where models were)
-    for key in values:
-        touched.setdefault(RANGE_FIELDS[key][0], set()).add(RANGE_FIELDS[key][1])
-    return bench.model_copy(update={
-        name: getattr(bench, name).model_copy(update={f: data[name][f] for f in fields})
-        for name, fields in touched.items()})
 
 
 def check_bench(bench: BenchProfile, source: str) -> None:

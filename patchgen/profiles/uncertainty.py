@@ -66,3 +66,51 @@ def range_problem(value) -> str | None:
     if value[0] > value[1]:
         return f"is reversed: low {value[0]:g} above high {value[1]:g}"
     return None
+
+
+def nominal_or_none(bench: BaseModel, key: str) -> float | None:
+    """The profile's own value of an uncertain parameter, None where the bench has no such signal."""
+    path = RANGE_FIELDS[key]
+    section = getattr(bench, path[0])
+    return getattr(section, path[1]) if len(path) == 2 else nominal(bench, key)
+
+
+def nominal(bench: BaseModel, key: str) -> float:
+    """The profile's own value of an uncertain parameter (a RANGE_FIELDS key; 0 for a sensor
+    noise the profile does not state)."""
+    path = RANGE_FIELDS[key]
+    section = getattr(bench, path[0])
+    if len(path) == 3:
+        return float(getattr(section, path[1]).get(path[2], 0.0))
+    return float(getattr(section, path[1]))
+
+
+def bench_at(bench: BaseModel, values: dict[str, float]) -> BaseModel:
+    """The bench with some of its uncertain parameters (RANGE_FIELDS keys) at the given values.
+
+    Parameters
+    ----------
+    bench : BenchProfile
+        The nominal bench (patchgen.profiles.bench, which imports this module: typed here as the
+        pydantic model it is).
+    values : dict of str to float
+        Parameter key -> value.
+
+    Returns
+    -------
+    BenchProfile
+        A copy with those values (not validated: see patchgen.profiles.bench.check_bench).
+    """
+    data = bench.model_dump()
+    for key, v in values.items():
+        path = RANGE_FIELDS[key]
+        target = data[path[0]]
+        if len(path) == 3:
+            target = target[path[1]]
+        target[path[-1]] = float(v)
+    touched = {}  # section -> the fields set (a whole dump would put plain dicts where models were)
+    for key in values:
+        touched.setdefault(RANGE_FIELDS[key][0], set()).add(RANGE_FIELDS[key][1])
+    return bench.model_copy(update={
+        name: getattr(bench, name).model_copy(update={f: data[name][f] for f in fields})
+        for name, fields in touched.items()})

@@ -28,8 +28,9 @@ from patchgen.bench.simulate import SimResult
 from patchgen.inputs.scenario import Scenario
 from patchgen.patch.netlist import Netlist
 from patchgen.plant.equations import PlantParams
-from patchgen.profiles.bench import BenchProfile, nominal
+from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.uncertainty import nominal
 from patchgen.studies import worst_case
 from patchgen.studies.ranking import ScenarioOutcome, outcome
 

@@ -34,8 +34,9 @@ from patchgen.bench.results import RunSummary
 from patchgen.inputs.scenario import Scenario
 from patchgen.patch.netlist import Netlist
 from patchgen.plant.equations import PlantParams
-from patchgen.profiles.bench import BenchProfile, bench_at
+from patchgen.profiles.bench import BenchProfile
 from patchgen.profiles.machine import MachineProfile
+from patchgen.profiles.uncertainty import bench_at
 
 EXACT_RANGES = 3  # up to this many ranges, every corner is run (8 corners)
 SCREEN_RUNS = 16  # seeds of each point screened or visited by the descent

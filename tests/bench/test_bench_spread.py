@@ -19,9 +19,9 @@ from patchgen.design.model import plant_params
 from patchgen.inputs.scenario import Scenario, load_scenario
 from patchgen.inputs.spec import load_spec
 from patchgen.patch.build import build_patch
-from patchgen.profiles.bench import BenchProfile, bench_at, load_bench
+from patchgen.profiles.bench import BenchProfile, load_bench
 from patchgen.profiles.machine import load_machine
-from patchgen.profiles.uncertainty import BenchUncertainty
+from patchgen.profiles.uncertainty import BenchUncertainty, bench_at
 from tests.conftest import design_path
 
 GP6 = load_machine("gp6")

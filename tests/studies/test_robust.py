@@ -15,9 +15,9 @@ from patchgen.inputs.scenario import load_scenario
 from patchgen.inputs.spec import load_spec
 from patchgen.patch.build import build_patch
 from patchgen.patch.netlist import read_netlist
-from patchgen.profiles.bench import bench_at, load_bench
+from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine
-from patchgen.profiles.uncertainty import BenchUncertainty
+from patchgen.profiles.uncertainty import BenchUncertainty, bench_at
 from patchgen.studies.bench_corners import MAX_CORNER_PARAMETERS, corner_values, study
 from tests.conftest import design_path
 

@@ -18,8 +18,7 @@ from patchgen.design.lqg import design_on
 from patchgen.inputs.scenario import load_scenario
 from patchgen.patch.build import build_patch
 from patchgen.pipeline.inputs import load_inputs
-from patchgen.profiles.bench import bench_at
-from patchgen.profiles.uncertainty import BenchUncertainty
+from patchgen.profiles.uncertainty import BenchUncertainty, bench_at
 from patchgen.studies import bench_corners, worst_case
 
 pytestmark = pytest.mark.heavy(12)  # seconds, roughly: see tests/conftest.py

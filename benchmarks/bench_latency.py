@@ -36,12 +36,14 @@ DESIGNS = ROOT / "designs"
 RSS_BYTES = 1 if sys.platform == "darwin" else 1024  # ru_maxrss unit: bytes on macOS, KiB on Linux
 MIB = 1024 * 1024
 RECORDINGS = ("bench-test", "bench-recommended", "--seed", "1", "-o")  # what REC stands for: made once
+ROTARY_RECORDINGS = ("bench-test", "qube-servo-2", "--seed", "1", "-o")  # and REC_QUBE, the QUBE's
 
 
 @dataclass(frozen=True)
 class Row:
-    """One command to time: its arguments (OUT stands for a fresh output directory, REC for bench
-    recordings), its targets, and what a run must leave behind to count as done."""
+    """One command to time: its arguments (OUT stands for a fresh output directory, REC and REC_QUBE
+    for bench recordings of the cart's and the QUBE's), its targets, and what a run must leave
+    behind to count as done."""
 
     name: str
     args: tuple[str, ...]
@@ -96,6 +98,10 @@ def rows(designs: Path = DESIGNS) -> list[Row]:
         Row("bench-test", ("bench-test", "bench-recommended", "-o", "OUT"), 3.0, writes=("quiet.csv",),
             table=False),
         Row("identify", ("identify", "REC", "-o", "OUT"), 6.0, writes=("bench.toml",), table=False),
+        Row("bench-test-qube", ("bench-test", "qube-servo-2", "-o", "OUT"), 3.0, writes=("free-swing.csv",),
+            table=False),
+        Row("identify-qube", ("identify", "REC_QUBE", "-o", "OUT"), 6.0, writes=("bench.toml",), table=False),
+        Row("swingup-qube", ("swingup", "qube-servo-2", "-o", "OUT"), 10.0, writes=("manoeuvre.json",), table=False),
     ]
     return table + extra
 
@@ -277,11 +283,12 @@ def main(argv: list[str] | None = None) -> int:
           f"(1, 5, 15 min) at the start; {plural(opts.repeats, 'timed run')} per row after one warm-up", file=show)
     print(HEADER, file=show, flush=True)
     work = Path(tempfile.mkdtemp(prefix="patchgen-recordings-"))
-    places = {"REC": str(work / "rec")}
+    places = {"REC": str(work / "rec"), "REC_QUBE": str(work / "rec-qube")}
     results = []
     try:
-        if any("REC" in r.args for r in chosen):
-            subprocess.run(patchgen_command() + list(RECORDINGS) + [places["REC"]], check=True, capture_output=True)
+        for key, made_by in (("REC", RECORDINGS), ("REC_QUBE", ROTARY_RECORDINGS)):
+            if any(key in r.args for r in chosen):
+                subprocess.run(patchgen_command() + list(made_by) + [places[key]], check=True, capture_output=True)
         for row in chosen:
             try:
                 res = measure(row, opts.repeats, places)

@@ -89,7 +89,7 @@ def test_row_is_a_command_line_patchgen_accepts(row, tmp_path, capsys):
     from patchgen.pipeline.inputs import load_inputs, scenario_for
 
     out, rec = tmp_path / "out", tmp_path / "rec"
-    args = [{"OUT": str(out), "REC": str(rec)}.get(a, a) for a in row.args]
+    args = [{"OUT": str(out), "REC": str(rec), "REC_QUBE": str(rec)}.get(a, a) for a in row.args]
     if args == ["--help"]:
         with pytest.raises(click.exceptions.Exit) as exit_:
             cli.make_context("patchgen", args)
@@ -102,9 +102,10 @@ def test_row_is_a_command_line_patchgen_accepts(row, tmp_path, capsys):
         inputs = load_inputs(ctx.params["spec"], bench=ctx.params.get("bench_name"), command=args[0])
         if ctx.params.get("scenario_path"):
             scenario_for(ctx.params["scenario_path"], inputs.spec, runs=ctx.params.get("runs", 1))
-    if "REC" in row.args:
-        assert ctx.params["recordings"] == (str(rec),)
-        _parse(list(latency.RECORDINGS) + [str(rec)])  # the command that makes the recordings
+    for key, made_by in (("REC", latency.RECORDINGS), ("REC_QUBE", latency.ROTARY_RECORDINGS)):
+        if key in row.args:
+            assert ctx.params["recordings"] == (str(rec),)
+            _parse(list(made_by) + [str(rec)])  # the command that makes the recordings
 
 
 def _python(code: str) -> list[str]:

@@ -69,7 +69,8 @@ def test_rows_selected_by_name_or_command():
     assert latency.select(ROWS, [], everything=True) == ROWS
     assert [r.args[1] for r in latency.select(ROWS, ["patch"])] == SHIPPED
     assert [r.name for r in latency.select(ROWS, ["spice", "design"])] == ["design", "spice"]  # table order
-    assert [r.name for r in latency.select(ROWS, ["identify"])] == ["identify"]  # an extra row, named
+    assert [r.name for r in latency.select(ROWS, ["identify"])] == ["identify", "identify-qube"]  # a command: its rows
+    assert [r.name for r in latency.select(ROWS, ["identify-qube"])] == ["identify-qube"]  # an extra row, named
     with pytest.raises(ValueError, match="unknown row 'nonesuch'"):
         latency.select(ROWS, ["nonesuch"])
 

@@ -6,8 +6,8 @@ describes, the sensors' constants and noise from its calibration and quiet recor
   (uniform rods), through the plant's own equations.
 - k_t = k_m: the motor step's drive k, J_0 and the links' R_m: k_t = k J_0 R_m (an ideal motor's
   torque and back-EMF constants are equal in SI units).
-- D_r: the coast-downs' a_c J_0 and the step's a_s J_0 - k_t k_m / R_m, combined, with a check that
-  they agree.
+- D_r: the arm's own decay D_r / J_0, from the coast-downs (a_c) and the step (a_s - k_t k_m /
+  (R_m J_0)), combined with a check that they agree, times J_0.
 - D_p, J_p: the free swing (patchgen.identify.pendulum's fit), its effective length L and decay
   beta, with the pendulum's mass and centre (L_p / 2) from the links.
 - sensors.alpha, sensors.theta and their noise: calibration and quiet.
@@ -113,32 +113,32 @@ def _combined(result, estimates: list[Estimate], what: str) -> Estimate:
 
 
 def _motor(result, j0: float, j0_se: float, fig: Links, src: str) -> None:
-    """k_t = k_m and D_r from the step's drive and decay and the coasts' decay."""
+    """k_t = k_m and D_r from the step's drive and decay and the coasts' decay. The arm's own decay
+    D_r / J_0 is had twice (the coasts' a_c, the step's a_s - k_t k_m / (R_m J_0)), combined, and
+    only then multiplied by J_0: J_0's error, common to both, is counted once."""
     steps, coasts = _pick(result, "motor_step", "k"), _pick(result, "arm_coast", "a")
-    damping: list[Estimate] = []
+    decays: list[Estimate] = []
     if coasts:
-        a_c = _combined(result, coasts, "the arm's coast-down decay")
-        damping.append(normal(a_c.value * j0, math.hypot(a_c.se * j0, a_c.value * j0_se), "N m s/rad",
-                              f"a J_0; {a_c.method}", a_c.source, a_c.dof))
-    if not steps:
-        if damping:
-            result.plant["D_r"] = Parameter(damping[0].value, "N m s/rad", damping[0], damping[0].source)
+        decays.append(_combined(result, coasts, "the arm's coast-down decay"))
+    if steps:
+        k = _combined(result, steps, "the motor step's drive")
+        a_s = _combined(result, _pick(result, "motor_step", "a"), "the motor step's decay")
+        x = np.array([k.value, a_s.value, j0, fig.R_m_ohm])
+        cov = np.diag([k.se ** 2, a_s.se ** 2, j0_se ** 2, fig.R_m_uncertainty_ohm ** 2])
+        kt, kt_se = delta(lambda v: v[0] * v[2] * v[3], x, cov)
+        sources = ", ".join(dict.fromkeys(s for s in (k.source, src) if s))
+        est = normal(kt, kt_se, "N m/A", f"k J_0 R_m; {DELTA}", sources, k.dof)
+        result.plant["k_t"] = Parameter(kt, "N m/A", est, sources)
+        result.plant["k_m"] = Parameter(kt, "V s/rad", Estimate(kt, est.low, est.high, "V s/rad", est.method, sources,
+                                                                 est.dof), f"{sources} (k_m = k_t in SI units)")
+        d, d_se = delta(lambda v: v[1] - v[0] * v[0] * v[2] * v[3], x, cov)  # a_s - k_t k_m / (R_m J_0)
+        decays.insert(0, normal(d, d_se, "1/s", f"a_s - k^2 J_0 R_m; {DELTA}", a_s.source, a_s.dof))
+    if not decays:
         return
-    k = _combined(result, steps, "the motor step's drive")
-    a_s = _combined(result, _pick(result, "motor_step", "a"), "the motor step's decay")
-    r_se = fig.R_m_uncertainty_ohm
-    x = np.array([k.value, a_s.value, j0, fig.R_m_ohm])
-    cov = np.diag([k.se ** 2, a_s.se ** 2, j0_se ** 2, r_se ** 2])
-    kt, kt_se = delta(lambda v: v[0] * v[2] * v[3], x, cov)
-    sources = ", ".join(dict.fromkeys(s for s in (k.source, src) if s))
-    est = normal(kt, kt_se, "N m/A", f"k J_0 R_m; {DELTA}", sources, k.dof)
-    result.plant["k_t"] = Parameter(kt, "N m/A", est, sources)
-    result.plant["k_m"] = Parameter(kt, "V s/rad", Estimate(kt, est.low, est.high, "V s/rad", est.method, sources,
-                                                             est.dof), f"{sources} (k_m = k_t in SI units)")
-    d, d_se = delta(lambda v: v[1] * v[2] - (v[0] * v[2]) ** 2 * v[3], x, cov)
-    damping.insert(0, normal(d, d_se, "N m s/rad", f"a_s J_0 - k_t k_m / R_m; {DELTA}", a_s.source, a_s.dof))
-    est = _combined(result, damping, "D_r from the step and the coasts")
-    result.plant["D_r"] = Parameter(est.value, "N m s/rad", est, est.source)
+    own = _combined(result, decays, "D_r from the step and the coasts")
+    value, se = delta(lambda v: v[0] * v[1], np.array([own.value, j0]), np.diag([own.se ** 2, j0_se ** 2]))
+    est = normal(value, se, "N m s/rad", f"(D_r / J_0) J_0; {own.method}", own.source, own.dof)
+    result.plant["D_r"] = Parameter(value, "N m s/rad", est, est.source)
 
 
 def _swing(result, fig: Links, src: str) -> None:

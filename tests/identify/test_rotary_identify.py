@@ -74,7 +74,9 @@ def test_identify_recovers_the_motor_friction_and_pendulum_inside_their_interval
         assert widths[len(SEEDS) // 2] < 1.5, name  # an interval that says something
     for r in identified:
         assert {"sensors.alpha", "sensors.theta"} <= set(r.bench)
-        assert not [c for c in r.checks if c.rejected], [c.text for c in r.checks if c.rejected]
+    # each check rejects a right model at 1 %: a few false alarms over 40 seeds' checks, not many
+    alarms = [c.text for r in identified for c in r.checks if c.rejected]
+    assert len(alarms) <= 0.1 * len(SEEDS), alarms
 
 
 def test_the_identified_bench_and_plant_are_taken_by_every_command(qube, tmp_path):

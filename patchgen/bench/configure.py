@@ -213,6 +213,7 @@ def engine_config(circuit: Circuit, plant: PlantParams | RotaryParams, bench: Be
         plant_spread={k: v for k, v in spread.items() if v},
         bench_spread={k: list(v) for k, v in ranges.items()},
         bench_distribution=bench.uncertainty.distribution if ranges else None, plant=pm.name,
+        measured_plant=dict(bench.measured_plant),
     )
     return cfg, settings
 

@@ -104,6 +104,7 @@ class SimSettings:
     bench_spread: dict[str, list[float]] = field(default_factory=dict)  # key -> [low, high] each run drew from
     bench_distribution: str | None = None  # how: uniform or normal (None: no bench spread)
     plant: str = "cart-pendulum"  # the plant model simulated (patchgen.plant.plant_model): its words name the figures
+    measured_plant: dict[str, float] = field(default_factory=dict)  # the bench's own plant figures, in the spec's place
 
 
 @dataclass
@@ -136,11 +137,19 @@ class SimResult:
             "ideal": self.ideal,
             "ideal_meaning": IDEAL_MEANING if self.ideal else None,
             "seed": self.seed,
-            "settings": asdict(self.settings),
+            "settings": _settings(self.settings),
             "amplifiers": list(self.amplifiers),
             "first_run": _position_named(_jsonable(asdict(self.runs[0])), self.settings.plant),
             "distribution": _position_named(_jsonable(asdict(self.distribution)), self.settings.plant),
         }
+
+
+def _settings(settings: SimSettings) -> dict:
+    """The settings as plain data; ``measured_plant`` only where the bench states its own figures."""
+    out = asdict(settings)
+    if not out["measured_plant"]:
+        del out["measured_plant"]
+    return out
 
 
 def _position_named(data: dict, plant: str) -> dict:

@@ -4,6 +4,7 @@ design keeps the spec's, and a key or value the plant cannot have is one line na
 
 from __future__ import annotations
 
+import json
 import tomllib
 
 import numpy as np
@@ -97,3 +98,13 @@ def test_the_sheet_says_which_figures_the_bench_has_its_own(tmp_path):
     assert r.returncode == 0, r.stderr
     sheet = (tmp_path / "out" / "patch-sheet.md").read_text()
     assert sheet.count("the plant as this bench has it, D_p = 5e-05 (spec 0.0005)") == 1
+
+
+def test_summary_json_states_the_bench_figures_only_where_a_bench_has_them(tmp_path):
+    for spec, scenario, expected in (("qube-servo-2", "qube-tap", {"D_p": BENCH_D_P}), ("bench-recommended",
+                                                                                       "offset-10deg", None)):
+        out = tmp_path / spec
+        r = run_patchgen("simulate", spec, "--scenario", scenario, "--runs", "2", "-o", str(out))
+        assert r.returncode == 0, r.stderr
+        settings = json.loads((out / "summary.json").read_text())["settings"]
+        assert settings.get("measured_plant") == expected

@@ -21,7 +21,8 @@ from patchgen.design.numerics import failing_as
 from patchgen.design.observer import ObserverError, reduced_observer, reduced_observer_controller
 from patchgen.design.precision import GainSpread
 from patchgen.design.riccati import STABLE_TOL, design_spread, lqr_gain, stabilisable
-from patchgen.inputs.spec import DesignSpec, q_matrix, r_matrix
+from patchgen.design.weights import q_matrix, r_matrix
+from patchgen.inputs.spec import DesignSpec
 from patchgen.plant.equations import PlantParams
 from patchgen.plant.rotary_equations import RotaryParams
 from patchgen.profiles.bench import BenchProfile

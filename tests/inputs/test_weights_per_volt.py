@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from patchgen.design.lqg import design
+from patchgen.design.weights import r_matrix
 from patchgen.inputs.errors import InputError
 from patchgen.inputs.resources import resolve
-from patchgen.inputs.spec import DesignSpec, check_spec, r_matrix
+from patchgen.inputs.spec import DesignSpec, check_spec
 
 
 def _spec(**weights) -> DesignSpec:

@@ -8,7 +8,8 @@ import scipy.linalg as sla
 
 from patchgen.cli.options import parse_by, parse_vary
 from patchgen.design.model import build_model
-from patchgen.inputs.spec import load_spec, q_matrix, r_matrix
+from patchgen.design.weights import q_matrix, r_matrix
+from patchgen.inputs.spec import load_spec
 from patchgen.plant.equations import PlantParams
 from patchgen.profiles.machine import load_machine
 from patchgen.studies.sweep import cases, sweep

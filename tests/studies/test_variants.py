@@ -7,7 +7,8 @@ import pytest
 
 from patchgen.design.lqg import design_on
 from patchgen.design.model import build_model
-from patchgen.inputs.spec import check_spec, load_spec, q_matrix
+from patchgen.design.weights import q_matrix
+from patchgen.inputs.spec import check_spec, load_spec
 from patchgen.inputs.spec_file import spec_toml
 from patchgen.profiles.bench import load_bench
 from patchgen.profiles.machine import load_machine

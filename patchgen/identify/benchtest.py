@@ -49,7 +49,8 @@ MAX_COAST_SPEED = 1.0  # m/s
 SWING_ANGLE_DEG = 15.0  # the free swing's release angle
 SWING_DURATION_S = 60.0
 QUIET_SAMPLES = 20000
-QUIET_OVERSAMPLING = 10.0  # the quiet recording samples at ten times the sensors' bandwidth (at least 1 kHz)
+QUIET_OVERSAMPLING = 10.0  # the quiet recording samples at ten times the sensors' bandwidth ...
+QUIET_MIN_RATE_HZ = 1000.0  # ... and at 1 kHz at least
 DRIFT_DT_S = 0.02
 DRIFT_DURATION_S = 60.0
 INCLINE_DEG = 9.5  # the thesis's slope (B.2.1)
@@ -89,6 +90,11 @@ def _ramp_command(act, dt: float) -> np.ndarray:
     t = np.arange(int(round(RAMP_DURATION_S / dt)) + 1) * dt
     q = RAMP_DURATION_S / 4
     return np.interp(t, [0, q, 3 * q, 4 * q], [0.0, top, -top, 0.0])
+
+
+def quiet_step(bandwidth_Hz: float) -> float:
+    """The quiet recording's sample interval (s) for sensors of that noise bandwidth."""
+    return 1.0 / max(QUIET_MIN_RATE_HZ, QUIET_OVERSAMPLING * bandwidth_Hz)
 
 
 def _held(rng, n: int, rms: float, bandwidth: float, fine: float) -> np.ndarray:
@@ -192,7 +198,7 @@ def bench_test_files(plant: PlantParams, bench: BenchProfile, machine: MachinePr
                                   "cart clamped, pendulum held at 15 deg from hanging and let go, angle "
                                   f"{'encoder' if th_col.endswith('counts') else 'pot'} zeroed hanging; " + about)
     r = rng(8)
-    qdt = 1.0 / max(1000.0, QUIET_OVERSAMPLING * sens.noise_bandwidth_Hz)
+    qdt = quiet_step(sens.noise_bandwidth_Hz)
     cols = [np.arange(QUIET_SAMPLES) * qdt]
     for k in MEASURED:
         cols.append(motion.coloured(r, nrms(k), sens.noise_bandwidth_Hz, qdt, QUIET_SAMPLES))

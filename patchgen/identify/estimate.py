@@ -200,3 +200,15 @@ def combine(estimates: Sequence[Estimate]) -> tuple[Estimate, Check | None]:
 def abs_estimate(e: Estimate) -> Estimate:
     """The magnitude of a signed estimate (its interval reflected when the value is negative)."""
     return e if e.value >= 0 else Estimate(-e.value, -e.high, -e.low, e.unit, e.method, e.source, e.dof, e.std_error)
+
+
+def combine_into(result, estimates: Sequence[Estimate], what: str) -> Estimate:
+    """:func:`combine` for an identification (``result``: its checks and warnings): the agreement
+    check is kept under ``what`` and, when the recordings disagree, said as a warning."""
+    est, check = combine(estimates)
+    if check is not None:
+        result.checks.append(Check(f"{what}: {check.name}", check.statistic, check.threshold, check.rejected,
+                                   f"{what}: {check.text}"))
+        if check.rejected:
+            result.warnings.append(f"{what}: {check.text}")
+    return est

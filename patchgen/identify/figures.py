@@ -40,6 +40,7 @@ G_B2 = 9.81  # m/s^2: the gravity equation B.2 is written with
 G_TABLE_B1 = 9.807  # m/s^2: table B.1's
 
 
+G_WORKBOOK = 9.81  # m/s^2: gravity as Quanser's rotary pendulum workbook takes it (a links file may say otherwise)
 ASSUMED_MASS_UNCERTAINTY_KG = 0.5e-3  # a kitchen scale's half gram (assumed)
 ASSUMED_LENGTH_UNCERTAINTY_M = 0.5e-3  # a ruler's half millimetre (assumed)
 
@@ -88,7 +89,7 @@ class Links(InputModel):
     m_p_kg: Real = bounded(1e-3, 10, description="the pendulum's mass")
     L_p_m: Real = bounded(0.01, 2, description="the pendulum, pivot to tip")
     R_m_ohm: Real = bounded(1e-3, 1e3, description="the motor's terminal resistance (ohmmeter, rotor still)")
-    g_m_per_s2: Real = bounded(1, 30, default=9.81)
+    g_m_per_s2: Real = bounded(1, 30, default=G_WORKBOOK)
     mass_uncertainty_kg: Real = bounded(0, 1, default=ASSUMED_MASS_UNCERTAINTY_KG)
     length_uncertainty_m: Real = bounded(0, 1, default=ASSUMED_LENGTH_UNCERTAINTY_M)
     R_m_uncertainty_ohm: Real = bounded(0, 100, default=0.0, description="the ohmmeter's standard uncertainty")

@@ -30,7 +30,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from patchgen.identify import actuator, encoders, friction, motor, pendulum, sensors
-from patchgen.identify.estimate import Check, Estimate, Parameter, TestFit, abs_estimate, combine, normal, welch
+from patchgen.identify.estimate import (
+    Check,
+    Estimate,
+    Parameter,
+    TestFit,
+    abs_estimate,
+    combine_into,
+    normal,
+    welch,
+)
 from patchgen.identify.figures import G_TABLE_B1, Incline, Links, Masses, read_figures
 from patchgen.identify.kalman import FitError
 from patchgen.identify.plausible import check_fit
@@ -193,7 +202,7 @@ def identify(paths: list[str], base: BenchProfile | None = None) -> Identificati
     _plant(result, mass, mass_src, motor_of(base.actuator))
     drift = [abs_estimate(e) for e in _pick(fits, ("integrator_drift",), "drift")]
     if drift:
-        result.extra["drift_V_per_s"] = _combined(result, drift, "drift rate")
+        result.extra["drift_V_per_s"] = combine_into(result, drift, "drift rate")
     return result
 
 
@@ -222,20 +231,10 @@ def _fit(r: Recording, base: BenchProfile, k_theta: float, g: float, mass: Masse
     return None
 
 
-def _combined(result: Identification, estimates: list[Estimate], what: str) -> Estimate:
-    est, check = combine(estimates)
-    if check is not None:
-        result.checks.append(Check(f"{what}: {check.name}", check.statistic, check.threshold, check.rejected,
-                                   f"{what}: {check.text}"))
-        if check.rejected:
-            result.warnings.append(f"{what}: {check.text}")
-    return est
-
-
 def _constant(result: Identification, name: str, key: str, fallback: float, unit: str) -> float:
     found = _pick(result.fits, ("calibration",), name)
     if found:
-        est = _combined(result, found, f"sensor constant {key}")
+        est = combine_into(result, found, f"sensor constant {key}")
         result.bench[key] = Parameter(est.value, unit, est, est.source)
         return est.value
     result.bench[key] = Parameter(fallback, unit, None, f"base profile {result.base}")
@@ -254,10 +253,10 @@ def _actuator(result: Identification, base: BenchProfile) -> None:
     gains = _pick(fits, ("actuator_step", "actuator_ramp"), "K_U") if len(models) <= 1 else [
         f.estimates["K_U"] for f in step if "model: lag" in f.notes]
     if gains:
-        K = _combined(result, gains, "K_U")
+        K = combine_into(result, gains, "K_U")
         taus = _pick(fits, ("actuator_step", "actuator_ramp"), "tau") if len(models) <= 1 else [
             f.estimates["tau"] for f in step if "model: lag" in f.notes]  # tau from the same fits as K_U
-        tau = _combined(result, taus, "tau") if model != "gain" else None  # a gain's step fits no lag
+        tau = combine_into(result, taus, "tau") if model != "gain" else None  # a gain's step fits no lag
         if model == "lag" and tau.value < MIN_LAG_S:
             model = "gain"
         result.bench["actuator.model"] = Parameter(model, "", None, K.source)
@@ -273,7 +272,7 @@ def _actuator(result: Identification, base: BenchProfile) -> None:
     # lag, the dead zone and any hysteresis all shift the same edges
     dz = _pick(fits, ("actuator_step", "actuator_ramp"), "dead_zone")
     if dz:
-        est = _combined(result, dz, "dead zone")
+        est = combine_into(result, dz, "dead zone")
         result.bench["actuator.dead_zone_V"] = Parameter(max(est.value, 0.0), "V", est, est.source)
     else:
         result.bench["actuator.dead_zone_V"] = Parameter(base.actuator.dead_zone_V, "V", None,
@@ -286,10 +285,10 @@ def _sensors(result: Identification, base: BenchProfile, k_s: float) -> None:
     rho = _pick(result.fits, ("coast_down",), "rho")
     direct = _pick(result.fits, ("coast_down",), "K_s_dot")  # a filtered velocity's, against its position
     if direct:
-        est = _combined(result, direct, "K_s_dot")
+        est = combine_into(result, direct, "K_s_dot")
         result.bench["sensors.s_dot"] = Parameter(est.value, est.unit, est, est.source)
     elif rho:
-        r = _combined(result, rho, "rho = K_s / K_s_dot")
+        r = combine_into(result, rho, "rho = K_s / K_s_dot")
         ks = result.bench["sensors.s"].estimate
         ks_se = ks.se if ks else 0.0
         value = k_s / r.value
@@ -302,7 +301,7 @@ def _sensors(result: Identification, base: BenchProfile, k_s: float) -> None:
     for s in MEASURED:
         found = _pick(result.fits, ("quiet",), f"noise_{s}")
         if found:
-            est = _combined(result, found, f"noise on {s}")
+            est = combine_into(result, found, f"noise on {s}")
             result.bench[f"sensors.noise_V_rms.{s}"] = Parameter(est.value, "V", est, est.source)
         elif s in base.sensors.noise_V_rms:
             result.bench[f"sensors.noise_V_rms.{s}"] = Parameter(base.sensors.noise_V_rms[s], "V", None,
@@ -311,7 +310,7 @@ def _sensors(result: Identification, base: BenchProfile, k_s: float) -> None:
              if k.startswith("bandwidth_")]
     resolved = [b for b in bands if b.high > b.low]
     if resolved:
-        est = _combined(result, resolved, "noise bandwidth")
+        est = combine_into(result, resolved, "noise bandwidth")
         result.bench["sensors.noise_bandwidth_Hz"] = Parameter(est.value, "Hz", est, est.source)
     elif bands:
         top = max(bands, key=lambda b: b.value)
@@ -332,11 +331,11 @@ def _plant(result: Identification, mass: Masses | None, mass_src: str, drive=Non
         plant["g"] = Parameter(mass.g_m_per_s2, "m/s^2", None, mass_src)
     lengths = _pick(fits, ("free_swing",), "l")
     if lengths:
-        est = _combined(result, lengths, "l")
+        est = combine_into(result, lengths, "l")
         plant["l"] = Parameter(est.value, "m", est, est.source)
     decay = _pick(fits, ("coast_down",), "decay")
     if decay and mass is not None:
-        a = _combined(result, decay, "b_VF / (M + m)")
+        a = combine_into(result, decay, "b_VF / (M + m)")
         total = mass.M_kg + mass.m_kg + motor.moving_mass(drive)  # with a motor, the rotor moves with the cart
         total_se = math.hypot(mass.M_uncertainty_kg, mass.m_uncertainty_kg)
         est = normal(a.value * total, math.hypot(a.se * total, a.value * total_se), "kg/s", a.method, a.source,
@@ -356,11 +355,11 @@ def _plant(result: Identification, mass: Masses | None, mass_src: str, drive=Non
     if "b_VF" not in plant:
         slides = _pick(fits, ("incline",), "b_VF")
         if slides:
-            est = _combined(result, slides, "b_VF (incline)")
+            est = combine_into(result, slides, "b_VF (incline)")
             plant["b_VF"] = Parameter(est.value, "kg/s", est, est.source)
     damping = _pick(fits, ("free_swing",), "c")
     if damping:
-        est = _combined(result, damping, "c")
+        est = combine_into(result, damping, "c")
         plant["c"] = Parameter(est.value, "kg m^2/s", est, est.source)
     if lengths and mass is not None and mass.l_cm_m is not None:
         pendulum.rigid(result, mass.m_kg, mass.l_cm_m, mass_src)

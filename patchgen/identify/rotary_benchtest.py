@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from patchgen.identify import motion
-from patchgen.identify.benchtest import DYNAMIC_DT_S, FINE_STEPS, QUIET_SAMPLES, _csv, _toml
+from patchgen.identify.benchtest import DYNAMIC_DT_S, FINE_STEPS, QUIET_SAMPLES, _csv, _toml, quiet_step
 from patchgen.identify.figures import ASSUMED_LENGTH_UNCERTAINTY_M, ASSUMED_MASS_UNCERTAINTY_KG
 from patchgen.plant.rotary_equations import RotaryParams, generalised_forces, inertias, potential_gradient
 from patchgen.plant.rotary_pendulum import MEASURED
@@ -35,6 +35,9 @@ SWING_ANGLE_DEG = 30.0  # the release, from hanging: a QUBE's light pendulum is 
 SWING_DURATION_S = 30.0  # about six of the swing's decay times at D_p = 5e-5
 REST_S = 0.5  # s at rest before each motion
 CALIBRATION_MARKS = 11  # protractor marks per angle
+# the marks span what each sensor is used over: the arm about half its way to a QUBE's cable limit,
+# the pendulum the balance's +/-0.3 rad (rad)
+CALIBRATION_SPAN = {"alpha": 1.5, "theta": 0.3}
 ROTARY_FILES = ("links.toml", "calibration.csv", "motor-step.csv", "arm-coast-1.csv", "arm-coast-2.csv",
                 "free-swing.csv", "quiet.csv")
 
@@ -127,7 +130,7 @@ def rotary_bench_test_files(plant: RotaryParams, bench: BenchProfile, seed: int,
         "R_m_uncertainty_ohm": OHMMETER_FRACTION * plant.R_m},
         "links weighed and measured, the motor's resistance on an ohmmeter; " + about)
     r = rng(2)
-    marks = {"alpha": np.linspace(-1.5, 1.5, CALIBRATION_MARKS), "theta": np.linspace(-0.3, 0.3, CALIBRATION_MARKS)}
+    marks = {q: np.linspace(-span, span, CALIBRATION_MARKS) for q, span in CALIBRATION_SPAN.items()}
     cols, header = [], []
     for q in MEASURED:
         header += [f"{q}_rad", f"{q}_V"]
@@ -165,7 +168,7 @@ def rotary_bench_test_files(plant: RotaryParams, bench: BenchProfile, seed: int,
                                   f"arm clamped, pendulum held at {SWING_ANGLE_DEG:g} deg from hanging and let go, "
                                   "its encoder zeroed hanging; " + about)
     r = rng(7)
-    qdt = 1.0 / max(1000.0, 10.0 * sens.noise_bandwidth_Hz)
+    qdt = quiet_step(sens.noise_bandwidth_Hz)
     cols = [np.arange(QUIET_SAMPLES) * qdt] + [motion.coloured(r, nrms(q), sens.noise_bandwidth_Hz, qdt, QUIET_SAMPLES)
                                                for q in MEASURED]
     files["quiet.csv"] = csv("quiet", ("t_s", *(f"{q}_V" for q in MEASURED)), cols,

@@ -22,8 +22,8 @@ import math
 import numpy as np
 
 from patchgen.identify import pendulum, rotary_motor, sensors
-from patchgen.identify.estimate import DELTA, Estimate, Parameter, TestFit, abs_estimate, combine, delta, normal
-from patchgen.identify.figures import Links
+from patchgen.identify.estimate import DELTA, Estimate, Parameter, TestFit, abs_estimate, combine_into, delta, normal
+from patchgen.identify.figures import G_WORKBOOK, Links
 from patchgen.identify.kalman import FitError
 from patchgen.identify.recording import Recording
 from patchgen.inputs.errors import InputError
@@ -60,7 +60,7 @@ def _fit(rec: Recording, base: BenchProfile, links: Links | None) -> TestFit | N
     if rec.test == "arm_coast":
         return rotary_motor.fit_arm_coast(rec, _per_rad(base, "alpha", rec), band)
     if rec.test == "free_swing":
-        return pendulum.fit_swing(rec, _per_rad(base, "theta", rec), links.g_m_per_s2 if links else 9.81, band,
+        return pendulum.fit_swing(rec, _per_rad(base, "theta", rec), links.g_m_per_s2 if links else G_WORKBOOK, band,
                                   links.m_p_kg if links else None, links.mass_uncertainty_kg if links else 0.0,
                                   "theta_counts")
     raise rec.error("test", f"{rec.test} is a cart's test: a rotary bench takes calibration, quiet, motor_step, "
@@ -80,7 +80,7 @@ def rotary_identify(result, recs: list[Recording], links: tuple[str, Links] | No
     _sensors(result, base)
     drift = _pick(result, "integrator_drift", "drift")
     if drift:
-        result.extra["drift_V_per_s"] = _combined(result, [abs_estimate(e) for e in drift], "drift rate")
+        result.extra["drift_V_per_s"] = combine_into(result, [abs_estimate(e) for e in drift], "drift rate")
     if fig is None:
         result.warnings.append("no links figures (test = \"links\"): the arm's inertia, hence the motor and the "
                                "dampings, cannot be had from the decays alone")
@@ -103,15 +103,6 @@ def _pick(result, test: str, name: str) -> list[Estimate]:
     return [f.estimates[name] for f in result.fits if f.test == test and name in f.estimates]
 
 
-def _combined(result, estimates: list[Estimate], what: str) -> Estimate:
-    est, check = combine(estimates)
-    if check is not None:
-        result.checks.append(check)
-        if check.rejected:
-            result.warnings.append(f"{what}: {check.text}")
-    return est
-
-
 def _motor(result, j0: float, j0_se: float, fig: Links, src: str) -> None:
     """k_t = k_m and D_r from the step's drive and decay and the coasts' decay. The arm's own decay
     D_r / J_0 is had twice (the coasts' a_c, the step's a_s - k_t k_m / (R_m J_0)), combined, and
@@ -119,10 +110,10 @@ def _motor(result, j0: float, j0_se: float, fig: Links, src: str) -> None:
     steps, coasts = _pick(result, "motor_step", "k"), _pick(result, "arm_coast", "a")
     decays: list[Estimate] = []
     if coasts:
-        decays.append(_combined(result, coasts, "the arm's coast-down decay"))
+        decays.append(combine_into(result, coasts, "the arm's coast-down decay"))
     if steps:
-        k = _combined(result, steps, "the motor step's drive")
-        a_s = _combined(result, _pick(result, "motor_step", "a"), "the motor step's decay")
+        k = combine_into(result, steps, "the motor step's drive")
+        a_s = combine_into(result, _pick(result, "motor_step", "a"), "the motor step's decay")
         x = np.array([k.value, a_s.value, j0, fig.R_m_ohm])
         cov = np.diag([k.se ** 2, a_s.se ** 2, j0_se ** 2, fig.R_m_uncertainty_ohm ** 2])
         kt, kt_se = delta(lambda v: v[0] * v[2] * v[3], x, cov)
@@ -135,7 +126,7 @@ def _motor(result, j0: float, j0_se: float, fig: Links, src: str) -> None:
         decays.insert(0, normal(d, d_se, "1/s", f"a_s - k^2 J_0 R_m; {DELTA}", a_s.source, a_s.dof))
     if not decays:
         return
-    own = _combined(result, decays, "D_r from the step and the coasts")
+    own = combine_into(result, decays, "D_r from the step and the coasts")
     value, se = delta(lambda v: v[0] * v[1], np.array([own.value, j0]), np.diag([own.se ** 2, j0_se ** 2]))
     est = normal(value, se, "N m s/rad", f"(D_r / J_0) J_0; {own.method}", own.source, own.dof)
     result.plant["D_r"] = Parameter(value, "N m s/rad", est, est.source)
@@ -147,8 +138,8 @@ def _swing(result, fig: Links, src: str) -> None:
     lengths, decays = _pick(result, "free_swing", "l"), _pick(result, "free_swing", "beta")
     if not lengths:
         return
-    L = _combined(result, lengths, "the swing's effective length")
-    beta = _combined(result, decays, "the swing's decay")
+    L = combine_into(result, lengths, "the swing's effective length")
+    beta = combine_into(result, decays, "the swing's decay")
     u_m, u_l = fig.mass_uncertainty_kg, fig.length_uncertainty_m
     x = np.array([L.value, beta.value, fig.m_p_kg, fig.L_p_m])
     cov = np.diag([L.se ** 2, beta.se ** 2, u_m ** 2, u_l ** 2])
@@ -168,19 +159,19 @@ def _sensors(result, base: BenchProfile) -> None:
     for q in MEASURED:
         found = _pick(result, "calibration", f"K_{q}")
         if found:
-            est = _combined(result, found, f"sensor constant {q}")
+            est = combine_into(result, found, f"sensor constant {q}")
             result.bench[f"sensors.{q}"] = Parameter(est.value, "V/rad", est, est.source)
         else:
             result.bench[f"sensors.{q}"] = Parameter(getattr(base.sensors, q), "V/rad", None, origin)
         noise = _pick(result, "quiet", f"noise_{q}")
         if noise:
-            est = _combined(result, noise, f"noise on {q}")
+            est = combine_into(result, noise, f"noise on {q}")
             result.bench[f"sensors.noise_V_rms.{q}"] = Parameter(est.value, "V", est, est.source)
         elif q in base.sensors.noise_V_rms:
             result.bench[f"sensors.noise_V_rms.{q}"] = Parameter(base.sensors.noise_V_rms[q], "V", None, origin)
     bands = [b for q in MEASURED for b in _pick(result, "quiet", f"bandwidth_{q}") if b.high > b.low]
     if bands:
-        est = _combined(result, bands, "noise bandwidth")
+        est = combine_into(result, bands, "noise bandwidth")
         result.bench["sensors.noise_bandwidth_Hz"] = Parameter(est.value, "Hz", est, est.source)
     else:
         result.bench["sensors.noise_bandwidth_Hz"] = Parameter(base.sensors.noise_bandwidth_Hz, "Hz", None, origin)

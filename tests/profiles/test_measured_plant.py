@@ -77,6 +77,7 @@ def test_a_sweep_row_puts_the_bench_figure_off_by_its_factor(qube):
     ({"D_p": -1e-5}, "measured_plant.D_p", "outside its physical bounds"),
     ({"L_p": 5.0}, "measured_plant.L_p", "outside its physical bounds"),
     ({"D_p": "5e-5"}, "measured_plant.D_p", ""),
+    ({"D_p": float("inf")}, "measured_plant.D_p", ""),
 ])
 def test_a_figure_the_plant_cannot_have_is_one_line_naming_it(tmp_path, table, field, words):
     data = tomllib.loads(resolve("bench", "qube-servo-2").read_text())
